@@ -1,0 +1,14 @@
+"""demflow: discrete element simulation of dry and saturated granular media.
+
+Scene → build → Simulation → results → analysis → report.
+"""
+from .scene import (ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene,
+                    SceneError, Servo, Wall)
+from .build import build
+from .simulation import BlowUpError, Simulation
+from .results import Results
+
+__version__ = "0.1.0"
+
+__all__ = ["Scene", "Discs", "Wall", "Phase", "Servo", "Material", "LinearLaw", "ContactModel",
+           "GlobalDamping", "Outputs", "SceneError", "build", "Simulation", "BlowUpError", "Results"]

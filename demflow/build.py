@@ -1,0 +1,238 @@
+"""Scene → Simulation: check a scene and allocate only what its physics needs.
+
+Everything a user can get wrong is checked here, before any step runs, and refused with
+a message that names the value, the constraint and the fix.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .integrate import critical_time_step
+from .laws.linear import NORMAL_INCREMENTAL, NORMAL_OVERLAP, SLIDING_CS, SLIDING_THESIS
+from .scene import Scene, SceneError, check_identifier
+from .contacts.neighbours import point_segment_distance
+
+
+def _as_array(name, v, n):
+    a = np.asarray(v, dtype=np.float64).reshape(-1)
+    if a.shape[0] != n:
+        raise SceneError(f"discs.{name} has {a.shape[0]} entries for {n} discs; give one per disc")
+    if not np.all(np.isfinite(a)):
+        k = int(np.flatnonzero(~np.isfinite(a))[0])
+        raise SceneError(f"discs.{name}[{k}] = {a[k]} is not finite; give a finite number")
+    return a
+
+
+def _check_discs(scene: Scene):
+    d = scene.discs
+    n = len(d)
+    x = _as_array("x", d.x, n)
+    y = _as_array("y", d.y, n)
+    r = _as_array("radius", d.radius, n)
+    bad = np.flatnonzero(r <= 0)
+    if bad.size:
+        k = int(bad[0])
+        raise SceneError(f"disc {k} has radius {r[k]}; a radius must be > 0")
+    mats = [d.material] * n if isinstance(d.material, str) else list(d.material)
+    if len(mats) != n:
+        raise SceneError(f"discs.material has {len(mats)} entries for {n} discs; give one per disc or one name")
+    for k, m in enumerate(mats):
+        if m not in scene.materials:
+            raise SceneError(
+                f"disc {k} uses material {m!r}, which the scene does not declare; "
+                f"add it to scene.materials (declared: {sorted(scene.materials)})"
+            )
+    if d.mass is not None:
+        mass = _as_array("mass", d.mass, n)
+    else:
+        rho = np.array([scene.materials[m].density for m in mats], dtype=np.float64)
+        mass = rho * np.pi * r * r
+    bad = np.flatnonzero(mass <= 0)
+    if bad.size:
+        k = int(bad[0])
+        raise SceneError(
+            f"disc {k} has mass {mass[k]} (material {mats[k]!r}, density "
+            f"{scene.materials[mats[k]].density}); a mass must be > 0: set a positive density or mass"
+        )
+    inertia = 0.5 * mass * r * r
+    v = np.zeros((n, 2))
+    if d.velocity is not None:
+        v = np.asarray(d.velocity, dtype=np.float64).reshape(n, 2)
+        if not np.all(np.isfinite(v)):
+            raise SceneError("discs.velocity has a non-finite entry; give finite velocities")
+    om = np.zeros(n)
+    if d.angular_velocity is not None:
+        om = _as_array("angular_velocity", d.angular_velocity, n)
+    return x, y, r, mats, mass, inertia, v, om
+
+
+def _check_overlaps(x, y, r, walls, tol):
+    """Refuse initial disc-disc or disc-wall overlaps beyond tol × the smaller radius."""
+    from .contacts.neighbours import pairs_cell_search
+
+    n = x.shape[0]
+    if n == 0:
+        return
+    ax = np.array([w[0] for w in walls], dtype=np.float64)
+    ay = np.array([w[1] for w in walls], dtype=np.float64)
+    bx = np.array([w[2] for w in walls], dtype=np.float64)
+    by = np.array([w[3] for w in walls], dtype=np.float64)
+    fi, ot = pairs_cell_search(x, y, r, 0.0, ax, ay, bx, by)
+    for i, j in zip(fi, ot):
+        if j < n:
+            dist = math.hypot(x[j] - x[i], y[j] - y[i])
+            ov = r[i] + r[j] - dist
+            lim = tol * min(r[i], r[j])
+            what = f"discs {min(i, j)} and {max(i, j)}"
+        else:
+            _, _, dist = point_segment_distance(x[i], y[i], ax[j - n], ay[j - n], bx[j - n], by[j - n])
+            ov = r[i] - dist
+            lim = tol * r[i]
+            what = f"disc {i} and wall {j - n}"
+        if ov > lim:
+            raise SceneError(
+                f"{what} overlap by {ov:.6g} at the start, more than the tolerance {lim:.6g} "
+                f"(overlap_tolerance={tol} × radius); move them apart or raise scene.overlap_tolerance"
+            )
+
+
+def build(scene: Scene):
+    """Check ``scene`` and return a ready :class:`~demflow.simulation.Simulation`."""
+    from .simulation import Simulation
+
+    check_identifier("scene", scene.name)
+    for m in scene.materials:
+        check_identifier("material", m)
+    scene.contact_model.check()
+    scene.damping.check()
+    x, y, r, mats, mass, inertia, v, om = _check_discs(scene)
+    n = x.shape[0]
+
+    # walls
+    names = set()
+    wall_geo = []
+    for w in scene.walls:
+        check_identifier("wall", w.name)
+        if w.name in names:
+            raise SceneError(f"two walls are named {w.name!r}; wall names must be unique")
+        names.add(w.name)
+        if w.material not in scene.materials:
+            raise SceneError(f"wall {w.name!r} uses undeclared material {w.material!r}; add it to scene.materials")
+        ex, ey = map(float, w.direction)
+        L = math.hypot(ex, ey)
+        if not (L > 0 and math.isfinite(L)):
+            raise SceneError(f"wall {w.name!r} has direction {w.direction}; give a non-zero finite vector")
+        if not (math.isfinite(w.h1) and math.isfinite(w.h2) and w.h1 < w.h2):
+            raise SceneError(f"wall {w.name!r} has h1={w.h1}, h2={w.h2}; need finite h1 < h2 (endpoints P+h1·e, P+h2·e)")
+        ex, ey = ex / L, ey / L
+        px, py = map(float, w.point)
+        wall_geo.append((px + w.h1 * ex, py + w.h1 * ey, px + w.h2 * ex, py + w.h2 * ey, px, py, ex, ey))
+        for ph in w.phases:
+            if int(ph.cycles) != ph.cycles or ph.cycles < 0:
+                raise SceneError(f"wall {w.name!r}: phase cycles={ph.cycles}; give a whole number >= 0")
+            if not all(math.isfinite(float(c)) for c in (*ph.velocity, ph.omega)):
+                raise SceneError(f"wall {w.name!r}: a phase has a non-finite velocity or omega")
+        if w.servo is not None:
+            s = w.servo
+            if not (s.force > 0 and s.gain > 0 and s.v_max > 0):
+                raise SceneError(
+                    f"wall {w.name!r}: servo force={s.force}, gain={s.gain}, v_max={s.v_max}; all must be > 0"
+                )
+            if math.hypot(*s.direction) == 0:
+                raise SceneError(f"wall {w.name!r}: servo direction is zero; give the unit load direction")
+
+    # laws for every material pair that can meet
+    mat_names = sorted(scene.materials)
+    mid = {m: k for k, m in enumerate(mat_names)}
+    nm = len(mat_names)
+    tables = {k: np.zeros((nm, nm)) for k in ("kn", "ks", "cn", "cs", "mu", "coh")}
+    disc_mats = sorted(set(mats))
+    wall_mats = sorted({w.material for w in scene.walls})
+    count = {m: mats.count(m) for m in disc_mats}
+    needed = [(a, b) for ia, a in enumerate(disc_mats) for b in disc_mats[ia:]
+              if (a != b or count[a] >= 2)]
+    needed += [(a, b) for a in disc_mats for b in wall_mats]
+    used = set()
+    for a, b in needed:
+        law = scene.law_for(a, b)
+        law.check((a, b))
+        used.add((a, b))
+        for key in tables:
+            val = {"mu": law.friction, "coh": law.cohesion}.get(key, getattr(law, key, None))
+            tables[key][mid[a], mid[b]] = val
+            tables[key][mid[b], mid[a]] = val
+    has_shear = bool(any(scene.law_for(a, b).ks > 0 for a, b in used))
+    k_max = max([max(scene.law_for(a, b).kn, scene.law_for(a, b).ks) for a, b in used], default=0.0)
+
+    # time step
+    dt_crit = critical_time_step(mass, k_max)
+    if scene.dt is None:
+        if not (0 < scene.dt_fraction <= 1):
+            raise SceneError(f"dt_fraction={scene.dt_fraction}; give a fraction in (0, 1] of the critical time step")
+        dt = scene.dt_fraction * dt_crit
+        if not math.isfinite(dt):
+            raise SceneError("no contact law with stiffness applies, so no critical time step exists; give scene.dt")
+    else:
+        dt = float(scene.dt)
+        if not (dt > 0 and math.isfinite(dt)):
+            raise SceneError(f"dt={scene.dt}; give a finite time step > 0")
+        if dt > dt_crit and not scene.allow_supercritical:
+            raise SceneError(
+                f"dt={dt:.6g} is above the critical time step 2√(m_min/k_max) = {dt_crit:.6g} "
+                f"(m_min={mass.min():.6g}, k_max={k_max:.6g}); use dt <= {0.1 * dt_crit:.6g} "
+                "(10 % of critical, thesis §2.2.4.4) or set allow_supercritical=True"
+            )
+
+    if n:
+        _check_overlaps(x, y, r, wall_geo, scene.overlap_tolerance)
+
+    # damping per disc
+    d = scene.damping
+    if d.alpha > 0:
+        C = d.alpha * mass
+        Cr = d.alpha * inertia
+    else:
+        C = np.full(n, d.C)
+        Cr = np.full(n, d.C_rot)
+
+    if scene.outputs.every < 0:
+        raise SceneError(f"outputs.every={scene.outputs.every}; give 0 (no records) or a positive step count")
+    skin = scene.skin if scene.skin is not None else (0.2 * float(r.mean()) if n else 1.0)
+    if not (skin > 0 and math.isfinite(skin)):
+        raise SceneError(f"skin={skin}; give a positive neighbour-list margin")
+
+    wall_index = {w.name: k for k, w in enumerate(scene.walls)}
+
+    def body(b):
+        if isinstance(b, str) and b.startswith("wall:"):
+            nm_ = b[5:]
+            if nm_ not in wall_index:
+                raise SceneError(f"tracked pair names wall {nm_!r}, which the scene does not have")
+            return n + wall_index[nm_]
+        b = int(b)
+        if not 0 <= b < n:
+            raise SceneError(f"tracked pair names disc {b}; discs are numbered 0..{n - 1}")
+        return b
+
+    track = []
+    for a, b in scene.outputs.track_pairs:
+        ia, ib = body(a), body(b)
+        if ia >= n and ib >= n:
+            raise SceneError(f"tracked pair ({a}, {b}) joins two walls; walls do not touch each other")
+        if ia >= n or (ib < n and not (r[ia] > r[ib] or (r[ia] == r[ib] and ia < ib))):
+            ia, ib = ib, ia
+        track.append((ia, ib))
+
+    normal_mode = NORMAL_INCREMENTAL if scene.contact_model.normal == "incremental" else NORMAL_OVERLAP
+    sliding_mode = SLIDING_CS if scene.contact_model.sliding == "cs" else SLIDING_THESIS
+
+    return Simulation(
+        scene=scene, x=x, y=y, r=r, mass=mass, inertia=inertia, v=v, om=om,
+        mat=np.array([mid[m] for m in mats], dtype=np.int64),
+        wall_geo=wall_geo, wall_mat=np.array([mid[w.material] for w in scene.walls], dtype=np.int64),
+        tables=tables, has_shear=has_shear, dt=dt, dt_crit=dt_crit, C=C, Cr=Cr, skin=skin,
+        gravity=tuple(map(float, scene.gravity)), normal_mode=normal_mode, sliding_mode=sliding_mode,
+        track=track, material_names=mat_names,
+    )

@@ -1,0 +1,127 @@
+"""Result tables: the one format every engine (demflow, YADE, LIGGGHTS) produces.
+
+Tables (pandas DataFrames, long format, saved as Parquet):
+
+- ``wall_forces``: step, time, wall, fx, fy, moment, px, py — force of the discs on each
+  wall [force], its moment about the wall point P [force·length], P's position [length]
+- ``tracked``: step, time, a, b, fn, fs — total normal and shear force of tracked pairs
+- ``energy``: step, time, kinetic, elastic [force·length]
+- ``particles``: step, time, id, x, y, theta, vx, vy, omega, radius (at snapshots)
+- ``contacts``: step, time, i, j, wall, px, py, nx, ny, fn, fs, sliding, overlap
+  (at snapshots; j = -1 and wall = name for disc-wall contacts; n from i to j/the wall)
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+TABLES = ("wall_forces", "tracked", "energy", "particles", "contacts")
+
+
+def _atomic_write(path: Path, write):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=path.suffix + ".tmp")
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+@dataclass
+class Results:
+    """The tables of one run plus its metadata (engine, scene, dt, ...)."""
+
+    wall_forces: pd.DataFrame
+    tracked: pd.DataFrame
+    energy: pd.DataFrame
+    particles: pd.DataFrame
+    contacts: pd.DataFrame
+    meta: dict = field(default_factory=dict)
+    walls: dict = field(default_factory=dict)  # wall name -> geometry at each snapshot
+
+    @classmethod
+    def from_simulation(cls, sim) -> "Results":
+        dt = sim.dt
+        wf, tr, en = [], [], []
+        for steps, wall, wpos, track, energy in sim._records:
+            t = steps * dt
+            for w, name in enumerate(sim.wall_names):
+                wf.append(pd.DataFrame(dict(step=steps, time=t, wall=name, fx=wall[:, w, 0], fy=wall[:, w, 1],
+                                            moment=wall[:, w, 2], px=wpos[:, w, 0], py=wpos[:, w, 1])))
+            for k, (a, b) in enumerate(sim.track):
+                tr.append(pd.DataFrame(dict(step=steps, time=t, a=_body_name(sim, a), b=_body_name(sim, b),
+                                            fn=track[:, k, 0], fs=track[:, k, 1])))
+            en.append(pd.DataFrame(dict(step=steps, time=t, kinetic=energy[:, 0], elastic=energy[:, 1])))
+        parts, cons, walls = [], [], []
+        for s in sim._snapshots:
+            p = s["particles"]
+            parts.append(pd.DataFrame(dict(step=s["step"], time=s["time"], id=np.arange(sim.n), **p)))
+            c = s["contacts"]
+            is_wall = c["other"] >= sim.n
+            wall_name = np.array([sim.wall_names[o - sim.n] if o >= sim.n else "" for o in c["other"]], dtype=object)
+            cons.append(pd.DataFrame(dict(
+                step=s["step"], time=s["time"], i=c["finder"], j=np.where(is_wall, -1, c["other"]),
+                wall=wall_name, px=c["px"], py=c["py"], nx=c["nx"], ny=c["ny"], fn=c["fn"], fs=c["fs"],
+                sliding=c["sliding"], overlap=c["overlap"])))
+            w = s["walls"]
+            walls.append(pd.DataFrame(dict(step=s["step"], wall=sim.wall_names, **w)))
+        cat = lambda xs, cols: pd.concat(xs, ignore_index=True) if xs else pd.DataFrame(columns=cols)
+        meta = dict(engine="demflow", scene=sim.scene.name, dt=dt, dt_crit=sim.dt_crit, steps=sim.step,
+                    n_discs=sim.n, walls=sim.wall_names, rebuilds=sim.rebuilds)
+        return cls(
+            wall_forces=cat(wf, ["step", "time", "wall", "fx", "fy", "moment", "px", "py"]),
+            tracked=cat(tr, ["step", "time", "a", "b", "fn", "fs"]),
+            energy=cat(en, ["step", "time", "kinetic", "elastic"]),
+            particles=cat(parts, ["step", "time", "id", "x", "y", "theta", "vx", "vy", "omega", "radius"]),
+            contacts=cat(cons, ["step", "time", "i", "j", "wall", "px", "py", "nx", "ny", "fn", "fs",
+                                "sliding", "overlap"]),
+            meta=meta,
+            walls={"geometry": cat(walls, ["step", "wall", "px", "py", "ex", "ey", "h1", "h2"])},
+        )
+
+    def wall(self, name: str) -> pd.DataFrame:
+        """Force history of one wall."""
+        return self.wall_forces[self.wall_forces.wall == name].reset_index(drop=True)
+
+    def pair(self, a, b) -> pd.DataFrame:
+        """Force history of one tracked pair (names as in the table: '3', 'wall:floor')."""
+        a, b = str(a), str(b)
+        t = self.tracked
+        sel = ((t.a == a) & (t.b == b)) | ((t.a == b) & (t.b == a))
+        return t[sel].reset_index(drop=True)
+
+    def save(self, out: str | os.PathLike) -> Path:
+        """Write every table as Parquet plus meta.json into directory ``out`` (atomically)."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        for name in TABLES:
+            df = getattr(self, name)
+            _atomic_write(out / f"{name}.parquet", lambda p, df=df: df.to_parquet(p, index=False))
+        geo = self.walls.get("geometry")
+        if geo is not None:
+            _atomic_write(out / "wall_geometry.parquet", lambda p: geo.to_parquet(p, index=False))
+        _atomic_write(out / "meta.json", lambda p: Path(p).write_text(json.dumps(self.meta, indent=2, default=str)))
+        return out
+
+    @classmethod
+    def load(cls, out: str | os.PathLike) -> "Results":
+        out = Path(out)
+        tables = {name: pd.read_parquet(out / f"{name}.parquet") for name in TABLES}
+        meta = json.loads((out / "meta.json").read_text())
+        walls = {}
+        if (out / "wall_geometry.parquet").exists():
+            walls["geometry"] = pd.read_parquet(out / "wall_geometry.parquet")
+        return cls(**tables, meta=meta, walls=walls)
+
+
+def _body_name(sim, b):
+    return f"wall:{sim.wall_names[b - sim.n]}" if b >= sim.n else str(b)
