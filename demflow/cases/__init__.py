@@ -1,0 +1,19 @@
+"""Registered cases: every named case of the sources, one module each.
+
+``CASES`` maps the stable name (used by ``demflow run NAME``) to the case object.
+"""
+from __future__ import annotations
+
+from .base import Case, Check
+from .thesis_one_disc import OneDisc
+from .thesis_five_discs import FiveDiscs
+from .thesis_impact import Impact
+from .cs_nine_disc import NineDisc
+
+CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc())}
+
+
+def get_case(name: str) -> Case:
+    if name not in CASES:
+        raise KeyError(f"unknown case {name!r}; `demflow cases` lists them: {', '.join(CASES)}")
+    return CASES[name]

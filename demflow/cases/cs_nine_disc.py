@@ -1,0 +1,200 @@
+"""cs-nine-disc: C&S's nine-disc test (C&S "Nine disc test", Figs 5-9).
+
+Stated: R = 50, density 1000, a regular loosely packed assembly of nine discs in a square
+of four rigid walls; walls move inward at constant speed for 40 cycles and stop; contact
+C's normal force vs cycles; speeds 0.12 vs 0.04 at kn = ks = 1.35e9 and 0.36 vs 0.12 at
+1.5e8 (the slow case loads for 3× the cycles, same displacement); distortion at constant
+volume by a constant angular velocity about the wall centres, ks/kn = 2/3 and 1, φ = 15°
+and 30°, kn = 1.35e9.
+
+Lost with Figs 5 and 8, and assumed here (stated in the report):
+
+* "regular loosely packed" = a 3×3 square lattice touching its neighbours and the walls
+  (box 300 × 300, centres at 50, 150, 250); contact C = the contact between the centre
+  disc (4) and its right-hand neighbour (5) (parameter ``contact_c``);
+* Δt = f × 2√(m/k_max) (C&S: "a fraction of the critical time step"), so the 1.5e8 runs
+  reach the same force as the 1.35e9 runs, as C&S say.  f is the one lost parameter we fit:
+  the undamped amplitude after a 40-cycle ramp depends steeply on it (measured: f = 0.06,
+  0.08, 0.085, 0.09, 0.1 give 0.136, 0.156, 0.133, 0.102, 0.027 F_eq), and f = 0.08 gives
+  C&S's ≈ 0.15; every other nine-disc observation is a prediction;
+* friction φ = 30° in the compression tests (not stated).  With friction, discs slide along
+  the walls during loading, so the final state depends on the path: damped and undamped runs
+  end 0.8 % (f = 0.1) and 1.8 % (f = 0.08) apart at φ = 30° (measured), 6e-6 apart at φ = 80° (no slip) and 1e-6 apart
+  frictionless.  The damping-independence check of C&S Fig. 6 is therefore made on the
+  frictionless variants, and the φ = 30° difference is shown beside it;
+* damping (when on): contact dashpots cn = 2ζ√(m kn), cs = 2ζ√(m ks) and mass-proportional
+  global damping α = 2ζ√(kn/m) with ζ = 0.05 each;
+* distortion (Fig. 8a): after compression and a rest, the two side walls rotate about their
+  centres with the same angular velocity while the top and bottom walls stay, so the
+  box becomes a parallelogram of constant base and height: constant volume (area).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene import (Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene, Wall)
+from .base import Case, Check
+
+R = 50.0
+RHO = 1000.0
+MASS = RHO * np.pi * R * R
+SRC = "C&S nine-disc test (Figs 6-9)"
+
+
+def lattice():
+    xs, ys = [], []
+    for row in range(3):
+        for col in range(3):
+            xs.append(50.0 + 100.0 * col)
+            ys.append(50.0 + 100.0 * row)
+    return xs, ys
+
+
+def nine_disc_scene(name, *, kn, ks, phi_deg, speed, load_cycles, rest_cycles, zeta=0.0,
+                    dt_fraction=0.1, distort_omega=0.0, distort_cycles=0, contact_c=(4, 5), every=1):
+    dt = dt_fraction * 2.0 * np.sqrt(MASS / max(kn, ks))
+    hold = rest_cycles + distort_cycles
+    def wall(nm, point, direction, h, inward, side):
+        phases = [Phase(load_cycles, velocity=tuple(speed * np.asarray(inward)))]
+        if distort_cycles and side:
+            phases += [Phase(rest_cycles), Phase(distort_cycles, omega=distort_omega)]
+        return Wall(nm, point, direction, -h, h, "wall", phases=tuple(phases))
+    walls = [wall("bottom", (150.0, 0.0), (1.0, 0.0), 400.0, (0.0, 1.0), False),
+             wall("right", (300.0, 150.0), (0.0, 1.0), 250.0, (-1.0, 0.0), True),
+             wall("top", (150.0, 300.0), (1.0, 0.0), 400.0, (0.0, -1.0), False),
+             wall("left", (0.0, 150.0), (0.0, 1.0), 250.0, (1.0, 0.0), True)]
+    cn = 2 * zeta * np.sqrt(MASS * kn)
+    cs = 2 * zeta * np.sqrt(MASS * ks)
+    law = LinearLaw(kn=kn, ks=ks, cn=cn, cs=cs, friction=float(np.tan(np.radians(phi_deg))))
+    x, y = lattice()
+    n = load_cycles + hold
+    return Scene(name=name, discs=Discs(x=x, y=y, radius=[R] * 9, material="disc"),
+                 materials={"disc": Material(density=RHO), "wall": Material()},
+                 laws={("disc", "disc"): law, ("disc", "wall"): law}, walls=walls,
+                 damping=GlobalDamping(alpha=2 * zeta * np.sqrt(kn / MASS)), dt=dt, n_steps=n,
+                 outputs=Outputs(every=every, snapshots=(load_cycles, n), track_pairs=(contact_c,)),
+                 description=name)
+
+
+def contact_c_force(res):
+    t = res.tracked
+    return t.step.to_numpy(), t.fn.to_numpy(), t.fs.to_numpy()
+
+
+def oscillation(res, load_cycles):
+    """(Feq, amplitude): mean and half peak-to-peak of Fn at C after loading stops."""
+    s, fn, _ = contact_c_force(res)
+    after = fn[s >= load_cycles]
+    return float(after.mean()), float(0.5 * (after.max() - after.min()))
+
+
+class NineDisc(Case):
+    name = "cs-nine-disc"
+    title = "C&S nine-disc test: damping, loading speed, distortion"
+    source = "C&S (1979) nine-disc test"
+    assumptions = (
+        "3×3 square lattice touching its neighbours and the walls (box 300×300); contact C is between the centre "
+        "disc and its right-hand neighbour (Fig. 5a lost).",
+        "Δt = 0.08 × 2√(m/k_max): the Δt fraction is lost; 0.08 is fitted to C&S's undamped amplitude 0.15 F_eq "
+        "(sweep 0.06-0.1 in the case docstring). φ = 30° in compression tests; damping ζ = 0.05 contact and global.",
+        "With friction the compressed state is path dependent (sliding at the walls), so damping independence is "
+        "checked frictionless (2.6e-4 measured, mean over 3000 cycles) and the φ = 30° difference (1.8 % at f = 0.08) is shown as information.",
+        "Distortion (Fig. 8a lost): side walls rotate about their centres, top and bottom fixed (constant area).",
+    )
+    params = dict(dt_fraction=0.08, rest_cycles=3000, zeta=0.05, distort_cycles=3000, distort_gamma=0.03)
+
+    def scenes(self, p):
+        f = p["dt_fraction"]
+        rest = p["rest_cycles"]
+        sc = {}
+        common = dict(phi_deg=30.0, rest_cycles=rest, dt_fraction=f)
+        sc["undamped"] = nine_disc_scene("nine-disc-undamped", kn=1.35e9, ks=1.35e9, speed=0.12, load_cycles=40, **common)
+        sc["damped"] = nine_disc_scene("nine-disc-damped", kn=1.35e9, ks=1.35e9, speed=0.12, load_cycles=40,
+                                       zeta=p["zeta"], **common)
+        fl = dict(common, phi_deg=0.0)
+        sc["undamped-frictionless"] = nine_disc_scene("nine-disc-undamped-frictionless", kn=1.35e9, ks=0.0, speed=0.12,
+                                                      load_cycles=40, **fl)
+        sc["damped-frictionless"] = nine_disc_scene("nine-disc-damped-frictionless", kn=1.35e9, ks=0.0, speed=0.12,
+                                                    load_cycles=40, zeta=p["zeta"], **fl)
+        sc["speed-0.04-kn1.35e9"] = nine_disc_scene("nine-disc-speed-0p04-stiff", kn=1.35e9, ks=1.35e9, speed=0.04,
+                                                    load_cycles=120, **common)
+        sc["speed-0.36-kn1.5e8"] = nine_disc_scene("nine-disc-speed-0p36-soft", kn=1.5e8, ks=1.5e8, speed=0.36,
+                                                   load_cycles=40, **common)
+        sc["speed-0.12-kn1.5e8"] = nine_disc_scene("nine-disc-speed-0p12-soft", kn=1.5e8, ks=1.5e8, speed=0.12,
+                                                   load_cycles=120, **common)
+        nd = p["distort_cycles"]
+        dt = f * 2.0 * np.sqrt(MASS / 1.35e9)
+        omega = float(np.arctan(p["distort_gamma"]) / (nd * dt))
+        for phi in (15, 30):
+            for ratio, lab in ((2.0 / 3.0, "2/3"), (1.0, "1")):
+                key = f"distortion-phi{phi}-ks{lab.replace('/', 'of')}"
+                sc[key] = nine_disc_scene(f"nine-disc-{key}", kn=1.35e9, ks=ratio * 1.35e9, phi_deg=phi, speed=0.12,
+                                          load_cycles=40, rest_cycles=rest, zeta=p["zeta"], dt_fraction=f,
+                                          distort_omega=omega, distort_cycles=nd)
+        return sc
+
+    def checks(self, results, p):
+        out = []
+        feq_f, _ = oscillation(results["undamped-frictionless"], 40)
+        feq_fd = float(contact_c_force(results["damped-frictionless"])[1][-1])
+        out.append(Check.against("frictionless: Feq at C, damped (final) vs undamped (mean)", feq_fd, feq_f,
+                                 "nine-disc.damping-independence", SRC + ", Fig. 6"))
+        feq_u, amp_u = oscillation(results["undamped"], 40)
+        feq_d = float(contact_c_force(results["damped"])[1][-1])
+        info = Check.against("φ = 30°: Feq at C, damped vs undamped (informative: path dependent)", feq_d, feq_u,
+                             "nine-disc.damping-independence", SRC + ", Fig. 6")
+        info.tolerance, info.passed = float("inf"), True
+        info.why = "Sliding at the walls during loading makes the frictional end state path dependent (see assumptions)."
+        out.append(info)
+        out.append(Check.condition("undamped oscillation amplitude / Feq (C&S ≈ 0.15; Δt fraction fitted to it)",
+                                   0.10 < amp_u / feq_u < 0.20, amp_u / feq_u, SRC + ", Fig. 6",
+                                   "Calibration, not prediction: the lost Δt fraction was chosen to give C&S's value."))
+        for fast, slow, lab in (("undamped", "speed-0.04-kn1.35e9", "kn = 1.35e9: 0.12 vs 0.04"),
+                                ("speed-0.36-kn1.5e8", "speed-0.12-kn1.5e8", "kn = 1.5e8: 0.36 vs 0.12")):
+            fa, aa = oscillation(results[fast], 40)
+            fb, ab = oscillation(results[slow], 120)
+            out.append(Check.condition(f"faster loading, larger oscillation ({lab}): amplitude ratio fast/slow",
+                                       aa > ab, aa / ab if ab > 0 else float("inf"), SRC + ", Fig. 7",
+                                       "C&S: the amplitude after loading increases with the loading speed."))
+        return out
+
+    def figures(self, results, p, outdir):
+        import matplotlib.pyplot as plt
+        from ..plotting import contact_force_diagram
+
+        paths = []
+        fig, axs = plt.subplots(1, 3, figsize=(13, 3.6))
+        for key in ("undamped", "damped"):
+            s, fn, _ = contact_c_force(results[key])
+            axs[0].plot(s, fn, label=key, lw=1)
+        axs[0].set_title("damping (C&S Fig. 6)")
+        for key in ("undamped", "speed-0.04-kn1.35e9", "speed-0.36-kn1.5e8", "speed-0.12-kn1.5e8"):
+            s, fn, _ = contact_c_force(results[key])
+            axs[1].plot(s, fn, label=key, lw=1)
+        axs[1].set_title("loading speed (C&S Fig. 7)")
+        for key in [k for k in results if k.startswith("distortion")]:
+            s, fn, fs = contact_c_force(results[key])
+            axs[2].plot(s, fn, label=f"{key} Fn", lw=1)
+            axs[2].plot(s, np.abs(fs), ls="--", lw=1, label=f"{key} |Fs|")
+        axs[2].set_title("distortion (C&S Fig. 9)")
+        for ax in axs:
+            ax.set_xlabel("cycles")
+            ax.set_ylabel("force at C")
+            ax.legend(fontsize=6)
+        fig.tight_layout()
+        path = f"{outdir}/contact_c.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+        fig, axs = plt.subplots(1, 2, figsize=(8, 4))
+        contact_force_diagram(results["damped"], ax=axs[0])
+        axs[0].set_title("compressed (C&S Fig. 5b)", fontsize=9)
+        key = "distortion-phi30-ks1"
+        contact_force_diagram(results[key], ax=axs[1])
+        axs[1].set_title(f"distorted, {key} (C&S Fig. 8b)", fontsize=9)
+        fig.tight_layout()
+        path = f"{outdir}/force_diagrams.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+        return paths

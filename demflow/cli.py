@@ -1,0 +1,84 @@
+"""The `demflow` command: list cases, run one, validate all."""
+from __future__ import annotations
+
+import argparse
+import ast
+import json
+import sys
+from pathlib import Path
+
+
+def _parse_sets(items):
+    out = {}
+    for item in items or []:
+        if "=" not in item:
+            raise SystemExit(f"--set {item!r}: write key=value, e.g. --set dt=1e-4")
+        k, v = item.split("=", 1)
+        try:
+            out[k.strip()] = ast.literal_eval(v)
+        except (ValueError, SyntaxError):
+            out[k.strip()] = v
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="demflow", description="2D DEM after Cundall & Strack and Tan (1990)")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    sub.add_parser("cases", help="list the registered cases")
+    r = sub.add_parser("run", help="run one case and save its tables")
+    r.add_argument("case")
+    r.add_argument("--out", default=None, help="output directory (default runs/CASE)")
+    r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case parameter")
+    v = sub.add_parser("validate", help="run every validation case and write the report")
+    v.add_argument("--out", default="reports/validation")
+    v.add_argument("--case", action="append", help="only these cases")
+    args = ap.parse_args(argv)
+
+    from .cases import CASES, get_case
+
+    if args.cmd == "cases":
+        for name, c in CASES.items():
+            print(f"{name:24s} {c.title}  [{c.source}]")
+            print(f"{'':24s} parameters: {json.dumps(c.params)}")
+        return 0
+    if args.cmd == "run":
+        try:
+            case = get_case(args.case)
+            p = case.merged(_parse_sets(args.set))
+        except KeyError as e:
+            print(f"demflow: {e.args[0]}", file=sys.stderr)
+            return 2
+        import matplotlib
+
+        matplotlib.use("Agg")
+        out = Path(args.out or f"runs/{args.case}")
+        results = case.run(p)
+        for variant, res in results.items():
+            res.meta["case"], res.meta["variant"], res.meta["params"] = args.case, variant, p
+            res.save(out / variant)
+        checks = case.checks(results, p)
+        figs = case.figures(results, p, str(out))
+        for c in checks:
+            mark = "ok " if c.passed else "FAIL"
+            print(f"[{mark}] {c.name}: {c.value:.6g} (reference {c.reference:.6g}, error {c.error:.3g}, tol {c.tolerance:.3g})")
+        print(f"tables in {out}/<variant>/*.parquet; figures: {', '.join(figs)}")
+        return 0 if all(c.passed for c in checks) else 1
+    if args.cmd == "validate":
+        from .report import run_validation
+
+        try:
+            names = [get_case(n).name for n in args.case] if args.case else None
+        except KeyError as e:
+            print(f"demflow: {e.args[0]}", file=sys.stderr)
+            return 2
+        summary = run_validation(names, args.out)
+        for name, c in summary["cases"].items():
+            n_ok = sum(ch["passed"] for ch in c["checks"])
+            print(f"{'PASS' if c['passed'] else 'FAIL'}  {name:24s} {n_ok}/{len(c['checks'])} checks  {c['wall_time_s']} s")
+        print(f"report: {Path(args.out) / 'index.html'}  summary: {Path(args.out) / 'summary.json'}")
+        return 0 if all(c["passed"] for c in summary["cases"].values()) else 1
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

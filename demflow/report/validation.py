@@ -1,0 +1,109 @@
+"""`demflow validate`: run every registered case, check it, write reports/validation/.
+
+Pages are plain HTML with PNG figures (matplotlib, Agg); the machine-readable summary is
+``summary.json``.  Every file is written atomically.
+"""
+from __future__ import annotations
+
+import html
+import json
+import math
+import os
+import platform
+import tempfile
+import time
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+from ..cases import CASES  # noqa: E402
+
+
+def _atomic_text(path: Path, text: str):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    with os.fdopen(fd, "w") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
+
+
+def run_validation(names=None, outdir="reports/validation", overrides=None):
+    """Run the named cases (all by default); return the summary dict after writing the report."""
+    outdir = Path(outdir)
+    names = list(names or CASES)
+    summary = dict(generated=time.strftime("%Y-%m-%d %H:%M:%S"), python=platform.python_version(),
+                   machine=platform.machine(), cases={})
+    for name in names:
+        case = CASES[name]
+        p = case.merged((overrides or {}).get(name))
+        t0 = time.perf_counter()
+        results = case.run(p)
+        wall = time.perf_counter() - t0
+        checks = case.checks(results, p)
+        casedir = outdir / name
+        casedir.mkdir(parents=True, exist_ok=True)
+        figs = [Path(f).name for f in case.figures(results, p, str(casedir))]
+        summary["cases"][name] = dict(
+            title=case.title, source=case.source, params=p, wall_time_s=round(wall, 3),
+            passed=all(c.passed for c in checks), assumptions=list(case.assumptions), figures=figs,
+            checks=[dict(name=c.name, value=c.value, reference=c.reference, error=c.error,
+                         tolerance=c.tolerance, passed=c.passed, source=c.source, why=c.why,
+                         relative=c.relative) for c in checks])
+    write_report(summary, outdir)
+    return summary
+
+
+def _fmt(v):
+    if isinstance(v, float):
+        if math.isinf(v):
+            return "—"
+        return f"{v:.6g}"
+    return html.escape(str(v))
+
+
+CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
+table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:left}
+.pass{color:#070;font-weight:bold}.fail{color:#b00;font-weight:bold}img{max-width:100%;border:1px solid #eee}
+.small{font-size:12px;color:#555}"""
+
+
+def write_report(summary, outdir="reports/validation"):
+    outdir = Path(outdir)
+    rows = []
+    for name, c in summary["cases"].items():
+        n_ok = sum(ch["passed"] for ch in c["checks"])
+        rows.append(f"<tr><td><a href='{name}/index.html'>{name}</a></td><td>{html.escape(c['title'])}</td>"
+                    f"<td>{html.escape(c['source'])}</td><td>{n_ok}/{len(c['checks'])}</td>"
+                    f"<td class='{'pass' if c['passed'] else 'fail'}'>{'PASS' if c['passed'] else 'FAIL'}</td>"
+                    f"<td>{c['wall_time_s']}</td></tr>")
+        checks = "".join(
+            f"<tr><td>{html.escape(ch['name'])}</td><td>{_fmt(ch['value'])}</td><td>{_fmt(ch['reference'])}</td>"
+            f"<td>{_fmt(ch['error'])}</td><td>{_fmt(ch['tolerance'])}</td>"
+            f"<td class='{'pass' if ch['passed'] else 'fail'}'>{'pass' if ch['passed'] else 'FAIL'}</td>"
+            f"<td class='small'>{html.escape(ch['source'])}</td><td class='small'>{html.escape(ch['why'])}</td></tr>"
+            for ch in c["checks"])
+        assumptions = "".join(f"<li>{html.escape(a)}</li>" for a in c["assumptions"])
+        figs = "".join(f"<p><img src='{html.escape(f)}'></p>" for f in c["figures"])
+        params = html.escape(json.dumps(c["params"]))
+        page = (f"<!doctype html><html><head><meta charset='utf-8'><title>{name}</title><style>{CSS}</style></head>"
+                f"<body><p><a href='../index.html'>← all cases</a></p><h1>{html.escape(c['title'])}</h1>"
+                f"<p>Case <code>{name}</code>, source: {html.escape(c['source'])}. Parameters: <code>{params}</code>. "
+                f"Wall time {c['wall_time_s']} s. Run it: <code>demflow run {name}</code>.</p>"
+                f"<h2>Assumptions (what the sources leave open)</h2><ul>{assumptions}</ul>"
+                f"<h2>Checks</h2><p class='small'>error is relative unless the reference is 0; the tolerance and why "
+                f"come from <code>demflow/tolerances.py</code>; '—' marks an informative row.</p>"
+                f"<table><tr><th>check</th><th>demflow</th><th>reference</th><th>error</th><th>tolerance</th>"
+                f"<th></th><th>source</th><th>why this tolerance</th></tr>{checks}</table><h2>Figures</h2>{figs}"
+                f"</body></html>")
+        _atomic_text(outdir / name / "index.html", page)
+    all_ok = all(c["passed"] for c in summary["cases"].values())
+    index = (f"<!doctype html><html><head><meta charset='utf-8'><title>demflow validation</title><style>{CSS}</style>"
+             f"</head><body><h1>demflow validation report</h1><p>Generated {summary['generated']} "
+             f"(Python {summary['python']}, {summary['machine']}). Overall: "
+             f"<span class='{'pass' if all_ok else 'fail'}'>{'PASS' if all_ok else 'FAIL'}</span></p>"
+             f"<table><tr><th>case</th><th>what</th><th>source</th><th>checks passed</th><th></th><th>wall time [s]</th>"
+             f"</tr>{''.join(rows)}</table></body></html>")
+    _atomic_text(outdir / "index.html", index)
+    _atomic_text(outdir / "summary.json", json.dumps(summary, indent=2, default=str))
