@@ -32,6 +32,16 @@ def main(argv=None):
     v = sub.add_parser("validate", help="run every validation case and write the report")
     v.add_argument("--out", default="reports/validation")
     v.add_argument("--case", action="append", help="only these cases")
+    rf = sub.add_parser("reference", help="run a real engine and store its reference run (reference_runs/)")
+    rf.add_argument("case", choices=["cs-nine-disc"])
+    rf.add_argument("--engine", required=True, choices=["yade", "liggghts"])
+    rf.add_argument("--variant", action="append", help="only these variants (default: all the engine can express)")
+    rf.add_argument("--timeout", type=float, default=600.0)
+    cp = sub.add_parser("compare", help="compare engines on a case and write its comparison page")
+    cp.add_argument("case", choices=["cs-nine-disc"])
+    cp.add_argument("--engines", default="demflow,yade,liggghts")
+    cp.add_argument("--live", action="store_true", help="run the engines now instead of using stored references")
+    cp.add_argument("--out", default="reports/validation")
     args = ap.parse_args(argv)
 
     from .cases import CASES, get_case
@@ -63,6 +73,40 @@ def main(argv=None):
             print(f"[{mark}] {c.name}: {c.value:.6g} (reference {c.reference:.6g}, error {c.error:.3g}, tol {c.tolerance:.3g})")
         print(f"tables in {out}/<variant>/*.parquet; figures: {', '.join(figs)}")
         return 0 if all(c.passed for c in checks) else 1
+    if args.cmd == "reference":
+        from .cases.cs_nine_disc import NineDisc
+        from .cases.cs_nine_disc_engines import CASE, engine_scene, engine_variants
+        from .engines import EngineError, get_engine
+        from .engines import reference
+
+        p = NineDisc().merged()
+        variants = args.variant or list(engine_variants(args.engine))
+        bad = [v for v in variants if v not in engine_variants(args.engine)]
+        if bad:
+            print(f"demflow: {args.engine} cannot run variant(s) {bad}; it runs {list(engine_variants(args.engine))}",
+                  file=sys.stderr)
+            return 2
+        engine = get_engine(args.engine)
+        for v in variants:
+            try:
+                path = reference.generate(CASE, v, engine, engine_scene(v, p), params=p, timeout=args.timeout)
+            except EngineError as e:
+                print(f"demflow: {e}", file=sys.stderr)
+                return 1
+            print(f"stored {path}")
+        return 0
+    if args.cmd == "compare":
+        from .cases.cs_nine_disc_engines import NineDiscEngines
+        from .report import run_validation
+
+        engines = [e.strip() for e in args.engines.split(",") if e.strip() and e.strip() != "demflow"]
+        case = NineDiscEngines()
+        case.engines, case.live = tuple(engines), args.live
+        summary = run_validation([case.name], args.out, cases={case.name: case})
+        c = summary["cases"][case.name]
+        print(f"{'PASS' if c['passed'] else 'FAIL'}  {case.name}: {sum(ch['passed'] for ch in c['checks'])}/"
+              f"{len(c['checks'])} checks; page {Path(args.out) / case.name / 'index.html'}")
+        return 0 if c["passed"] else 1
     if args.cmd == "validate":
         from .report import run_validation
 

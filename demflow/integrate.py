@@ -52,3 +52,64 @@ def central_difference(x, y, th, vx, vy, om, Fx, Fy, M, mass, inertia, C, Cr, gx
         ddy = y[i] - yref[i]
         d2[i] = ddx * ddx + ddy * ddy
     return d2.max() if n > 0 else 0.0
+
+
+@njit_parallel
+def sum_and_integrate(start, sidx, f, r, x, y, th, vx, vy, om, mass, inertia, C, Cr, gx, gy, dt,
+                      xref, yref, P, Fx, Fy, M):
+    """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
+
+    The per-disc sums are those of :func:`demflow.contacts.forces.particle_sums` (same
+    contacts, same order): ``sidx[e]`` is the contact index k when the disc is the pair's
+    finder and -(k+1) when it is the other disc; f[k] = (fx, fy, Fs) from
+    :func:`demflow.contacts.forces.contact_forces_step`, the moment being Fs·R of the disc.
+    The update is :func:`central_difference`'s; the new x, y, v, ω are also written to the
+    packed rows P (see :func:`demflow.contacts.forces.pack_discs`), the sums to Fx, Fy, M.
+    Returns the largest squared displacement since (xref, yref) and the largest squared
+    displacement of this step in radii ((|v|Δt/R)², a disc that jumps a large part of its
+    radius in one step can pass through a contact unseen).
+    """
+    n = x.shape[0]
+    dmax2 = 0.0
+    jump2 = 0.0
+    for i in prange(n):
+        ri = r[i]
+        sx = 0.0
+        sy = 0.0
+        sm = 0.0
+        for e in range(start[i], start[i + 1]):
+            k = sidx[e]
+            if k >= 0:
+                sx += f[k, 0]
+                sy += f[k, 1]
+            else:
+                k = -k - 1
+                sx -= f[k, 0]
+                sy -= f[k, 1]
+            sm += f[k, 2] * ri
+        Fx[i] = sx
+        Fy[i] = sy
+        M[i] = sm
+        a = C[i] * dt / (2.0 * mass[i])
+        vxi = (vx[i] * (1.0 - a) + (sx / mass[i] + gx) * dt) / (1.0 + a)
+        vyi = (vy[i] * (1.0 - a) + (sy / mass[i] + gy) * dt) / (1.0 + a)
+        b = Cr[i] * dt / (2.0 * inertia[i])
+        omi = (om[i] * (1.0 - b) + sm * dt / inertia[i]) / (1.0 + b)
+        vx[i] = vxi
+        vy[i] = vyi
+        om[i] = omi
+        xi = x[i] + vxi * dt
+        yi = y[i] + vyi * dt
+        x[i] = xi
+        y[i] = yi
+        th[i] += omi * dt
+        P[i, 0] = xi
+        P[i, 1] = yi
+        P[i, 2] = vxi
+        P[i, 3] = vyi
+        P[i, 4] = omi
+        ddx = xi - xref[i]
+        ddy = yi - yref[i]
+        dmax2 = max(dmax2, ddx * ddx + ddy * ddy)
+        jump2 = max(jump2, (vxi * vxi + vyi * vyi) * dt * dt / (ri * ri))
+    return dmax2, jump2

@@ -28,6 +28,7 @@ def _atomic_write(path: Path, write):
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=path.suffix + ".tmp")
     os.close(fd)
+    os.chmod(tmp, 0o644)
     try:
         write(tmp)
         os.replace(tmp, path)

@@ -14,8 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from .contacts.forces import contact_forces
-from .contacts.neighbours import contacts_of_particles, pairs_cell_search, transfer_history
-from .stepping import BLOWUP, MAX_OVERLAP_RATIO, REBUILD, run_steps
+from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
+                                  spatial_order, transfer_history)
+from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps
 
 
 class BlowUpError(RuntimeError):
@@ -35,6 +36,11 @@ class Simulation:
     """State and stepping of one 2D disc scene (see :mod:`demflow.build`)."""
 
     CHUNK = 20000  # steps between last-good-state copies
+    # Below this many discs a step is too short to share between threads: on this 2-core
+    # machine the nine-disc test ran 65× slower on 2 threads than on 1 (4.06 s vs 0.063 s,
+    # 9040 steps); benchmarks/results/crossover.md: 2 threads pay off above ~4000 discs
+    # (0.91× at 4000, 1.74× at 10000).
+    PARALLEL_MIN_DISCS = 8000
 
     def __init__(self, *, scene, x, y, r, mass, inertia, v, om, mat, wall_geo, wall_mat, tables,
                  has_shear, dt, dt_crit, C, Cr, skin, gravity, normal_mode, sliding_mode, track,
@@ -111,7 +117,12 @@ class Simulation:
         self.step = 0
         self.disp_walls = 0.0
         self.rebuilds = 0
-        self._Fx, self._Fy, self._M, self._d2 = (np.zeros(n) for _ in range(4))
+        self._P = np.zeros((n, 8))  # packed disc rows for the pair-force kernel
+        self._Fx, self._Fy, self._M = (np.zeros(n) for _ in range(3))  # last step's force sums
+        # by slot: x, y, th, vx, vy, om, xref, yref, Fx, Fy, M
+        self._slots = tuple(np.zeros(n) for _ in range(11))
+        self._r_p, self._mass_p, self._inertia_p, self._C_p, self._Cr_p = (np.zeros(n) for _ in range(5))
+        self._mat_p = np.zeros(n, np.int64)
         self._records = []
         self._snapshots = []
         self.rebuild()
@@ -130,10 +141,16 @@ class Simulation:
         finder, other = pairs_cell_search(self.x, self.y, self.r, self.skin, ax, ay, bx, by)
         self.hist = transfer_history(self.finder, self.other, self.hist, finder, other, self.n + self.nw)
         self.finder, self.other = finder, other
-        self.start, self.idx, self.side = contacts_of_particles(finder, other, self.n)
+        start, sidx = contacts_of_particles_signed(finder, other, self.n)
+        wall_pairs = np.flatnonzero(other >= self.n).astype(np.int64)
+        # the steps run on the discs renumbered in spatial order (see stepping.run_steps)
+        self._perm = spatial_order(self.x, self.y, self.r, self.skin)
+        (self._inv, self._pos, self._fin_p, self._oth_p, self._start_p, self._sidx_p,
+         self._wall_p) = internal_layout(finder, other, self.n, self._perm, start, sidx, wall_pairs)
         m = finder.shape[0]
-        (self._fx, self._fy, self._mi, self._mj, self._fn, self._fs,
-         self._ovl, self._cpx, self._cpy) = (np.zeros(m) for _ in range(9))
+        self._hist_p = np.empty_like(self.hist)
+        self._f = np.zeros((m, 3))  # (fx, fy, Fs) per pair, the per-step work array
+        self._fn, self._fs, self._ovl, self._cpx, self._cpy = (np.zeros(m) for _ in range(5))
         self._slide = np.zeros(m, np.int8)
         self.xref, self.yref = self.x.copy(), self.y.copy()
         self.disp_walls = 0.0
@@ -146,7 +163,21 @@ class Simulation:
 
     # ------------------------------------------------------------------ running
     def run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
-            checkpoint_every: int | None = None) -> "Simulation":
+            checkpoint_every: int | None = None, threads: int | None = None) -> "Simulation":
+        """See :meth:`_run`; ``threads`` (default: 1 below PARALLEL_MIN_DISCS discs, else all
+        set by :func:`demflow.jit.set_threads`) only changes speed, never results."""
+        import numba
+
+        before = numba.get_num_threads()
+        want = threads or (1 if self.n < self.PARALLEL_MIN_DISCS else before)
+        numba.set_num_threads(min(want, numba.config.NUMBA_NUM_THREADS))
+        try:
+            return self._run(n_steps, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+        finally:
+            numba.set_num_threads(before)
+
+    def _run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
+             checkpoint_every: int | None = None) -> "Simulation":
         """Advance ``n_steps`` steps (default: the scene's n_steps minus steps done).
 
         Snapshots declared in the scene are taken when their step is reached.  With
@@ -181,9 +212,11 @@ class Simulation:
                     stop - self.step, self.step, self.skin, self.disp_walls,
                     self.x, self.y, self.th, self.vx, self.vy, self.om, self.r, self.mass, self.inertia,
                     self.C, self.Cr, self.mat, self.xref, self.yref, self.gx, self.gy,
-                    self.finder, self.other, self.hist, self.start, self.idx, self.side,
-                    self._fx, self._fy, self._mi, self._mj, self._fn, self._fs, self._slide, self._ovl,
-                    self._cpx, self._cpy, self._Fx, self._Fy, self._M, self._d2,
+                    self._perm, self._inv, self._r_p, self._mass_p, self._inertia_p, self._C_p, self._Cr_p,
+                    self._mat_p, *self._slots, self._P, self._Fx, self._Fy, self._M,
+                    self.finder, self.other, self.hist, self._pos, self._fin_p, self._oth_p, self._hist_p,
+                    self._start_p, self._sidx_p, self._wall_p,
+                    self._f, self._fn, self._fs, self._slide, self._ovl, self._cpx, self._cpy,
                     self.wpx, self.wpy, self.wex, self.wey, self.wh1, self.wh2, self.wvx, self.wvy,
                     self.wom, self.wcx, self.wcy, self.wmat, self.wall_force,
                     self.phase_start, self.phase_end, self.phase_vx, self.phase_vy, self.phase_om,
@@ -201,7 +234,8 @@ class Simulation:
                     path = self._save_last_good()
                     raise BlowUpError(
                         f"scene {self.scene.name!r} blew up at step {bad_step}: a contact overlapped more "
-                        f"than {MAX_OVERLAP_RATIO:.0%} of a radius or a force became non-finite. "
+                        f"than {MAX_OVERLAP_RATIO:.0%} of a radius, a disc moved more than {MAX_STEP_RATIO:.0%} "
+                        f"of its radius in one step, or a force became non-finite. "
                         f"Reduce dt (now {self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the "
                         f"loading rate. Last good state (step {self.step}) saved to {path}", path)
                 if status == REBUILD:

@@ -9,8 +9,11 @@ from .thesis_one_disc import OneDisc
 from .thesis_five_discs import FiveDiscs
 from .thesis_impact import Impact
 from .cs_nine_disc import NineDisc
+from .cs_nine_disc_engines import NineDiscEngines
+from .thesis_bem import CylinderMovingPlanes, CylinderPoiseuille, FreeRectangle
 
-CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc())}
+CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(),
+                                              CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
 
 
 def get_case(name: str) -> Case:

@@ -12,16 +12,23 @@ merge (keyed by pair, thesis §2.2.4.5 "update list of contacts made or broken")
 
 Cell search (thesis §2.2.4.5 boxes, generalised): discs are binned by centre into square
 cells of side h ≈ 2·r_median + skin; each disc searches only for discs no larger than
-itself, within ceil((2r + skin)/h) cells.  Small discs look at their 3×3 block, a rare
-large disc at a wider block, so the search stays O(N) for radius ratios of 100:1 and more.
+itself, in the cells overlapping the square of half-side 2r + skin around its centre.
+Small discs look at a 2×2 to 3×3 block, a rare large disc at a wider block, so the search
+stays O(N) for radius ratios of 100:1 and more.
 :func:`pairs_brute_force` is the O(N²) reference the cell search is tested against.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..jit import njit, njit_parallel
+import numba
 from numba import prange
+
+from ..jit import JIT_FLAGS, njit, njit_parallel
+
+# per-disc helpers that take arrays are inlined at the Numba IR level: a compiled call
+# with array arguments updates reference counts (atomic, serialising threads) per call
+njit_inline = numba.njit(inline="always", **JIT_FLAGS)
 
 
 @njit
@@ -44,7 +51,7 @@ def point_segment_distance(cx, cy, ax, ay, bx, by):
     return qx, qy, np.sqrt(dx * dx + dy * dy)
 
 
-@njit
+@njit_inline
 def _finds(i, j, r):
     """True when disc i is the finder of pair (i, j)."""
     if r[i] > r[j]:
@@ -90,43 +97,83 @@ def _grid(x, y, r, skin):
 
 
 @njit
-def _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, out):
-    """Write the 'other' discs of pairs found by disc i into out; return their count."""
-    reach = int(np.ceil((2.0 * r[i] + skin) / h))
-    cx = int((x[i] - xmin) / h)
-    cy = int((y[i] - ymin) / h)
-    if cx >= nx:
-        cx = nx - 1
-    if cy >= ny:
-        cy = ny - 1
+def _cell_sorted(x, y, r, order):
+    """x, y, r in cell order (contiguous per cell: the candidate scan reads no gathers)."""
+    n = order.shape[0]
+    xs = np.empty(n)
+    ys = np.empty(n)
+    rs = np.empty(n)
+    for k in range(n):
+        j = order[k]
+        xs[k] = x[j]
+        ys[k] = y[j]
+        rs[k] = r[j]
+    return xs, ys, rs
+
+
+@njit_inline
+def _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, xs, ys, rs, out, a, cap):
+    """Count the 'other' discs of pairs found by disc i; write the first ``cap`` of them
+    to out[a:].
+
+    Disc i finds discs no larger than itself, so its partners' centres lie within
+    L = 2r_i + skin of its own: only the cells overlapping the square [x_i ± L] x [y_i ± L]
+    are scanned (2-3 per axis for a typical disc, more for a large one), widened by a
+    relative 1e-12 so that rounding in the cell index cannot miss a partner.
+    """
+    xi = x[i]
+    yi = y[i]
+    ri = r[i]
+    L = 2.0 * ri + skin
+    Lm = L + 1e-12 * (L + abs(xi - xmin) + abs(yi - ymin))
+    gx0 = max(int((xi - Lm - xmin) / h), 0)
+    gx1 = min(int((xi + Lm - xmin) / h), nx - 1)
+    gy0 = max(int((yi - Lm - ymin) / h), 0)
+    gy1 = min(int((yi + Lm - ymin) / h), ny - 1)
     m = 0
-    for gy in range(max(cy - reach, 0), min(cy + reach, ny - 1) + 1):
-        for gx in range(max(cx - reach, 0), min(cx + reach, nx - 1) + 1):
-            c = gy * nx + gx
-            for k in range(start[c], start[c + 1]):
+    for gy in range(gy0, gy1 + 1):
+        # the cells gx0..gx1 of row gy are contiguous in cell order: one run of candidates
+        for k in range(start[gy * nx + gx0], start[gy * nx + gx1 + 1]):
+            rj = rs[k]
+            dx = xs[k] - xi
+            dy = ys[k] - yi
+            lim = ri + rj + skin
+            if dx * dx + dy * dy < lim * lim:
                 j = order[k]
-                if j == i or not _finds(i, j, r):
-                    continue
-                dx = x[j] - x[i]
-                dy = y[j] - y[i]
-                lim = r[i] + r[j] + skin
-                if dx * dx + dy * dy < lim * lim:
-                    if out.shape[0] > 0:
-                        out[m] = j
-                    m += 1
+                if j == i or rj > ri or (rj == ri and j < i):
+                    continue  # not found by i (see _finds)
+                if m < cap:
+                    out[a + m] = j
+                m += 1
     return m
 
 
-@njit
-def _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, out, m0):
+@njit_inline
+def _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, out, a, cap, m0):
     m = m0
     for w in range(wall_ax.shape[0]):
         qx, qy, d = point_segment_distance(x[i], y[i], wall_ax[w], wall_ay[w], wall_bx[w], wall_by[w])
         if d < r[i] + skin:
-            if out.shape[0] > 0:
-                out[m] = n + w
+            if m < cap:
+                out[a + m] = n + w
             m += 1
     return m
+
+
+@njit
+def _sort_small(v, a, b):
+    """Sort v[a:b] in place: insertion sort for the usual handful of entries, np.sort
+    (allocating) only for long lists (a large disc among many small ones)."""
+    if b - a > 32:
+        v[a:b] = np.sort(v[a:b])
+        return
+    for p in range(a + 1, b):
+        t = v[p]
+        q = p - 1
+        while q >= a and v[q] > t:
+            v[q + 1] = v[q]
+            q -= 1
+        v[q + 1] = t
 
 
 @njit_parallel
@@ -142,10 +189,16 @@ def pairs_cell_search(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
     if n == 0:
         return empty.copy(), empty.copy()
     xmin, ymin, h, nx, ny, cell, start, order = _grid(x, y, r, skin)
+    xs, ys, rs = _cell_sorted(x, y, r, order)
+    # one scan per disc into a fixed-size scratch row (K partners); discs with more
+    # (large discs among small ones) are scanned again straight into the result
+    K = 8
+    scratch = np.empty(n * K, np.int64)
     count = np.zeros(n + 1, np.int64)
     for i in prange(n):
-        m = _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, empty)
-        m = _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, empty, m)
+        m = _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, xs, ys, rs,
+                             scratch, i * K, K)
+        m = _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, scratch, i * K, K, m)
         count[i + 1] = m
     offs = np.cumsum(count)
     total = offs[n]
@@ -154,10 +207,14 @@ def pairs_cell_search(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
     for i in prange(n):
         a = offs[i]
         b = offs[i + 1]
-        buf = other[a:b]
-        m = _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, buf)
-        _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, buf, m)
-        buf[:m] = np.sort(buf[:m])
+        if b - a <= K:
+            for k in range(b - a):
+                other[a + k] = scratch[i * K + k]
+        else:
+            m = _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, xs, ys, rs,
+                                 other, a, b - a)
+            _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, other, a, b - a, m)
+        _sort_small(other, a, b)
         for k in range(a, b):
             finder[k] = i
     return finder, other
@@ -242,3 +299,84 @@ def contacts_of_particles(finder, other, n):
             side[fill[j]] = 1
             fill[j] += 1
     return start, idx, side
+
+
+@njit
+def contacts_of_particles_signed(finder, other, n):
+    """:func:`contacts_of_particles` with the side folded into the index: (start, sidx),
+    sidx = k where the disc is the finder of pair k, -(k+1) where it is the other disc."""
+    m = finder.shape[0]
+    count = np.zeros(n + 1, np.int64)
+    for k in range(m):
+        count[finder[k] + 1] += 1
+        if other[k] < n:
+            count[other[k] + 1] += 1
+    start = np.cumsum(count)
+    fill = start[:-1].copy()
+    sidx = np.empty(start[n], np.int64)
+    for k in range(m):
+        i = finder[k]
+        sidx[fill[i]] = k
+        fill[i] += 1
+        j = other[k]
+        if j < n:
+            sidx[fill[j]] = -k - 1
+            fill[j] += 1
+    return start, sidx
+
+
+@njit
+def spatial_order(x, y, r, skin):
+    """Disc indices in cell order (the cells of :func:`pairs_cell_search`, row by row):
+    discs close in space come close in memory."""
+    if x.shape[0] == 0:
+        return np.empty(0, np.int64)
+    return _grid(x, y, r, skin)[7]
+
+
+@njit
+def internal_layout(finder, other, n, perm, start, sidx, wall_pairs):
+    """Contact lists renumbered for discs stored in the order ``perm`` (slot p holds disc
+    perm[p]), pairs grouped by their finder's slot (keeping the key order within a finder).
+
+    Returns (inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p): inv[disc] = slot,
+    pos[k] = internal position of listed pair k; fin_p/oth_p the pairs in internal order
+    and numbering (walls keep n + w); (start_p, sidx_p) the per-slot contacts, each
+    slot's entries in the order of the disc's own list (start, sidx) so force sums are
+    added in the same order; wall_p = pos[wall_pairs] (same order).
+    """
+    m = finder.shape[0]
+    inv = np.empty(n, np.int64)
+    for p in range(n):
+        inv[perm[p]] = p
+    fcount = np.zeros(n + 1, np.int64)
+    for k in range(m):
+        fcount[finder[k] + 1] += 1
+    fstart = np.cumsum(fcount)
+    pos = np.empty(m, np.int64)
+    fin_p = np.empty(m, np.int64)
+    oth_p = np.empty(m, np.int64)
+    t = 0
+    for p in range(n):
+        i = perm[p]
+        for k in range(fstart[i], fstart[i + 1]):
+            pos[k] = t
+            fin_p[t] = p
+            j = other[k]
+            oth_p[t] = inv[j] if j < n else j
+            t += 1
+    start_p = np.zeros(n + 1, np.int64)
+    for p in range(n):
+        i = perm[p]
+        start_p[p + 1] = start_p[p] + start[i + 1] - start[i]
+    sidx_p = np.empty(start_p[n], np.int64)
+    for p in range(n):
+        i = perm[p]
+        e0 = start_p[p]
+        for e in range(start[i], start[i + 1]):
+            k = sidx[e]
+            sidx_p[e0 + e - start[i]] = pos[k] if k >= 0 else -pos[-k - 1] - 1
+    wall_p = np.empty(wall_pairs.shape[0], np.int64)
+    for q in range(wall_pairs.shape[0]):
+        wall_p[q] = pos[wall_pairs[q]]
+    return inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p

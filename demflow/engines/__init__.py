@@ -1,0 +1,49 @@
+"""Engines that run a demflow scene: demflow itself, YADE and LIGGGHTS (same result tables)."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from .base import (Engine, EngineError, EngineFailed, EngineNotFound, EngineOutputError, EngineRun, EngineTimeout,
+                   EngineUnsupported)
+from .liggghts import LiggghtsEngine
+from .yade import YadeEngine
+
+
+class DemflowEngine(Engine):
+    """demflow itself, behind the same interface (no subprocess)."""
+
+    name = "demflow"
+
+    def path(self):
+        return "demflow"
+
+    def available(self):
+        return True
+
+    def version(self):
+        from .. import __version__
+
+        return __version__
+
+    def run(self, scene, workdir=None, *, timeout=None, sim=None):
+        from ..build import build
+
+        t0 = time.perf_counter()
+        res = (sim or build(scene)).run().results()
+        run = EngineRun(engine="demflow", version=self.version(), command=["demflow"],
+                        wall_time_s=round(time.perf_counter() - t0, 3), date=time.strftime("%Y-%m-%dT%H:%M:%S"))
+        return res, run
+
+
+ENGINES: dict[str, Engine] = {"demflow": DemflowEngine(), "yade": YadeEngine(), "liggghts": LiggghtsEngine()}
+
+
+def get_engine(name: str) -> Engine:
+    if name not in ENGINES:
+        raise EngineError(f"unknown engine {name!r}; choose one of {', '.join(ENGINES)}")
+    return ENGINES[name]
+
+
+__all__ = ["ENGINES", "get_engine", "Engine", "EngineError", "EngineFailed", "EngineNotFound", "EngineOutputError",
+           "EngineTimeout", "EngineUnsupported", "DemflowEngine", "YadeEngine", "LiggghtsEngine"]

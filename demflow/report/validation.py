@@ -29,14 +29,25 @@ def _atomic_text(path: Path, text: str):
     os.replace(tmp, path)
 
 
-def run_validation(names=None, outdir="reports/validation", overrides=None):
-    """Run the named cases (all by default); return the summary dict after writing the report."""
+def run_validation(names=None, outdir="reports/validation", overrides=None, cases=None):
+    """Run the named cases (all by default); return the summary dict after writing the report.
+
+    ``cases`` may supply configured case objects by name (``demflow compare``).  An existing
+    summary in ``outdir`` is kept for the cases not run now, so one page can be refreshed alone.
+    """
     outdir = Path(outdir)
     names = list(names or CASES)
+    cases = dict(CASES, **(cases or {}))
+    old = {}
+    if (outdir / "summary.json").exists():
+        try:
+            old = json.loads((outdir / "summary.json").read_text()).get("cases", {})
+        except json.JSONDecodeError:
+            old = {}
     summary = dict(generated=time.strftime("%Y-%m-%d %H:%M:%S"), python=platform.python_version(),
-                   machine=platform.machine(), cases={})
+                   machine=platform.machine(), cases={k: v for k, v in old.items() if k in CASES and k not in names})
     for name in names:
-        case = CASES[name]
+        case = cases[name]
         p = case.merged((overrides or {}).get(name))
         t0 = time.perf_counter()
         results = case.run(p)
@@ -72,7 +83,7 @@ table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;paddin
 def write_report(summary, outdir="reports/validation"):
     outdir = Path(outdir)
     rows = []
-    for name, c in summary["cases"].items():
+    for name, c in sorted(summary["cases"].items(), key=lambda kv: list(CASES).index(kv[0])):
         n_ok = sum(ch["passed"] for ch in c["checks"])
         rows.append(f"<tr><td><a href='{name}/index.html'>{name}</a></td><td>{html.escape(c['title'])}</td>"
                     f"<td>{html.escape(c['source'])}</td><td>{n_ok}/{len(c['checks'])}</td>"
@@ -85,6 +96,11 @@ def write_report(summary, outdir="reports/validation"):
             f"<td class='small'>{html.escape(ch['source'])}</td><td class='small'>{html.escape(ch['why'])}</td></tr>"
             for ch in c["checks"])
         assumptions = "".join(f"<li>{html.escape(a)}</li>" for a in c["assumptions"])
+        extra = ""
+        if name == "cs-nine-disc-engines":
+            from ..engines.equivalence import as_html
+
+            extra = f"<h2>Model-equivalence table</h2>{as_html()}"
         figs = "".join(f"<p><img src='{html.escape(f)}'></p>" for f in c["figures"])
         params = html.escape(json.dumps(c["params"]))
         page = (f"<!doctype html><html><head><meta charset='utf-8'><title>{name}</title><style>{CSS}</style></head>"
@@ -95,7 +111,7 @@ def write_report(summary, outdir="reports/validation"):
                 f"<h2>Checks</h2><p class='small'>error is relative unless the reference is 0; the tolerance and why "
                 f"come from <code>demflow/tolerances.py</code>; '—' marks an informative row.</p>"
                 f"<table><tr><th>check</th><th>demflow</th><th>reference</th><th>error</th><th>tolerance</th>"
-                f"<th></th><th>source</th><th>why this tolerance</th></tr>{checks}</table><h2>Figures</h2>{figs}"
+                f"<th></th><th>source</th><th>why this tolerance</th></tr>{checks}</table>{extra}<h2>Figures</h2>{figs}"
                 f"</body></html>")
         _atomic_text(outdir / name / "index.html", page)
     all_ok = all(c["passed"] for c in summary["cases"].values())

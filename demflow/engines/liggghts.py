@@ -1,0 +1,325 @@
+"""LIGGGHTS-PUBLIC (Debian package ``liggghts``, 3.8.0): deck writer, runner and reader.
+
+How a demflow scene is expressed (see :mod:`demflow.engines.equivalence`): ``dimension 2``
+discs (``set density`` gives the disc mass ρπR² per unit thickness, the integrator the disc
+inertia ½mR²), ``hooke/stiffness`` with ``absolute_damping on`` and ``limitForce on``, per
+type-pair kn, kt, γn, γt, friction (type 1..K discs by material, walls after them); walls as
+two-triangle STL meshes spanning a thick periodic z, moved by ``move/mesh`` with variables
+that switch velocity by step inside one ``run``.  Forces on walls come from
+``mesh/surface/stress``; contact forces from ``compute pair/gran/local``.
+
+Not expressed: global damping (refused: LIGGGHTS has no implicit eq 2.27 form here), the
+incremental normal spring (LIGGGHTS computes kN × overlap), cohesion, servo walls.  The deck
+contains numbers and fixed names (w0, w1, ...) only.
+"""
+from __future__ import annotations
+
+import math
+import re
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from .base import Engine, EngineOutputError, EngineUnsupported, atomic_json, scene_numbers
+from .tables import results_from_records
+
+
+def _f(x) -> str:
+    x = float(x)
+    if not math.isfinite(x):
+        raise EngineUnsupported(f"non-finite number {x} cannot go into a LIGGGHTS deck")
+    return repr(x)
+
+
+def _stl(path: Path, ax, ay, bx, by, zlo, zhi):
+    tri = [((ax, ay, zlo), (bx, by, zlo), (bx, by, zhi)), ((ax, ay, zlo), (bx, by, zhi), (ax, ay, zhi))]
+    nx, ny = -(by - ay), bx - ax
+    L = math.hypot(nx, ny)
+    lines = ["solid wall"]
+    for t in tri:
+        lines.append(f"facet normal {_f(nx / L)} {_f(ny / L)} 0.0\nouter loop")
+        lines += [f"vertex {_f(v[0])} {_f(v[1])} {_f(v[2])}" for v in t]
+        lines.append("endloop\nendfacet")
+    lines.append("endsolid wall")
+    path.write_text("\n".join(lines) + "\n")
+
+
+class LiggghtsEngine(Engine):
+    name = "liggghts"
+    executable = "liggghts"
+    package = "liggghts"
+
+    def version(self) -> str:
+        out = subprocess.run([self.path(), "-h"], capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+        m = re.search(r"LIGGGHTS \(Version ([^)]*)\)", out.stdout)
+        return m.group(1) if m else out.stdout.splitlines()[0][:80]
+
+    def write_deck(self, scene, sim, deckdir: Path):
+        S = scene_numbers(scene, sim)
+        if any(c > 0 for c in S["damping"]["C"]) or any(c > 0 for c in S["damping"]["Cr"]):
+            raise EngineUnsupported("global damping has no equivalent in the LIGGGHTS deck; run an undamped variant")
+        mats = S["materials"]
+        disc_mats = sorted(set(S["discs"]["material"]))
+        wall_mats = sorted({w["material"] for w in S["walls"]})
+        types = disc_mats + [m for m in wall_mats if m not in disc_mats]
+        nt = len(types)
+        tid = {m: k + 1 for k, m in enumerate(types)}
+
+        def table(key):
+            vals = []
+            for a in types:
+                for b in types:
+                    law = S["laws"].get(f"{a}|{b}") or S["laws"].get(f"{b}|{a}")
+                    vals.append(_f(law[key]) if law else "0.0")
+            return " ".join(vals)
+
+        for law in S["laws"].values():
+            if law["coh"] != 0:
+                raise EngineUnsupported("cohesion is not expressed in the LIGGGHTS deck")
+        x, y, r = (np.asarray(S["discs"][k]) for k in ("x", "y", "r"))
+        rmax = float(r.max())
+        pad = 4.0 * rmax
+        xs = [x.min() - pad, x.max() + pad]
+        ys = [y.min() - pad, y.max() + pad]
+        for w in S["walls"]:
+            for h in (w["h1"], w["h2"]):
+                xs += [w["px"] + h * w["ex"]]
+                ys += [w["py"] + h * w["ey"]]
+        lo = (min(xs) - pad, min(ys) - pad)
+        hi = (max(xs) + pad, max(ys) + pad)
+        zl = 6.0 * rmax
+        dt = S["dt"]
+        n = S["n_discs"]
+        L = [
+            "# demflow deck for LIGGGHTS-PUBLIC 3.8.0: 2D discs, linear law, walls with prescribed motion",
+            "atom_style granular", "atom_modify map array sort 0 0", "dimension 2", "boundary f f p", "newton off",
+            "communicate single vel yes", "units si",
+            f"region box block {_f(lo[0])} {_f(hi[0])} {_f(lo[1])} {_f(hi[1])} {_f(-zl)} {_f(zl)} units box",
+            f"create_box {nt} box", "neighbor " + _f(0.2 * rmax) + " bin", "neigh_modify delay 0",
+            f"fix m1 all property/global kn peratomtypepair {nt} {table('kn')}",
+            f"fix m2 all property/global kt peratomtypepair {nt} {table('ks')}",
+            f"fix m3 all property/global gamman_abs peratomtypepair {nt} {table('cn')}",
+            f"fix m4 all property/global gammat_abs peratomtypepair {nt} {table('cs')}",
+            f"fix m5 all property/global coefficientFriction peratomtypepair {nt} {table('mu')}",
+            "pair_style gran model hooke/stiffness tangential history absolute_damping on limitForce on",
+            "pair_coeff * *", f"timestep {_f(dt)}",
+        ]
+        for i in range(n):
+            L.append(f"create_atoms {tid[S['discs']['material'][i]]} single {_f(x[i])} {_f(y[i])} 0.0 units box")
+        for i in range(n):
+            m = S["discs"]["mass"][i]
+            L.append(f"set atom {i + 1} diameter {_f(2 * r[i])} density {_f(m / (math.pi * r[i] ** 2))} "
+                     f"vx {_f(S['discs']['vx'][i])} vy {_f(S['discs']['vy'][i])} omegaz {_f(S['discs']['omega'][i])}")
+        meshes = []
+        for k, w in enumerate(S["walls"]):
+            ax, ay = w["px"] + w["h1"] * w["ex"], w["py"] + w["h1"] * w["ey"]
+            bx, by = w["px"] + w["h2"] * w["ex"], w["py"] + w["h2"] * w["ey"]
+            _stl(deckdir / f"w{k}.stl", ax, ay, bx, by, -zl, zl)
+            L.append(f"fix w{k} all mesh/surface/stress file w{k}.stl type {tid[w['material']]} "
+                     f"reference_point {_f(w['px'])} {_f(w['py'])} 0.0")
+            meshes.append(f"w{k}")
+        if meshes:
+            L.append(f"fix walls all wall/gran model hooke/stiffness tangential history mesh n_meshes {len(meshes)} "
+                     f"meshes {' '.join(meshes)} absolute_damping on limitForce on")
+        # motion: piecewise-constant velocities by step (all inside one run)
+        for k, w in enumerate(S["walls"]):
+            s0 = 0
+            vx_terms, vy_terms, om_terms = [], [], []
+            origin = None
+            for ph in w["phases"]:
+                s1 = s0 + ph["cycles"]
+                cond = f"(step>={s0 + 1})*(step<={s1})"
+                if ph["vx"]:
+                    vx_terms.append(f"{cond}*{_f(ph['vx'])}")
+                if ph["vy"]:
+                    vy_terms.append(f"{cond}*{_f(ph['vy'])}")
+                if ph["omega"]:
+                    if ph["pivot"] is not None:
+                        piv = ph["pivot"]
+                    else:  # about P: where demflow's P is when the phase starts
+                        piv = self._p_at(w, s0, dt)
+                    if origin is not None and (abs(origin[0] - piv[0]) > 1e-9 or abs(origin[1] - piv[1]) > 1e-9):
+                        raise EngineUnsupported("LIGGGHTS deck supports one rotation origin per wall")
+                    origin = piv
+                    om_terms.append(f"{cond}*{_f(ph['omega'])}")
+                s0 = s1
+            if vx_terms or vy_terms:
+                L.append(f"variable w{k}vx equal {'+'.join(vx_terms) or '0.0'}")
+                L.append(f"variable w{k}vy equal {'+'.join(vy_terms) or '0.0'}")
+                L.append(f"variable w{k}vz equal 0.0")
+                L.append(f"fix w{k}lin all move/mesh mesh w{k} linear/variable v_w{k}vx v_w{k}vy v_w{k}vz")
+            if om_terms:
+                L.append(f"variable w{k}om equal {'+'.join(om_terms)}")
+                L.append(f"fix w{k}rot all move/mesh mesh w{k} rotate/variable origin {_f(origin[0])} {_f(origin[1])} 0.0 "
+                         f"axis 0.0 0.0 1.0 omega v_w{k}om")
+        L += ["fix integr all nve/sphere", "fix e2d all enforce2d"]
+        every = int(S["every"])
+        if every > 0:  # every = 0: no outputs at all (benchmarks)
+            cols = []
+            for k in range(len(S["walls"])):
+                for c in (1, 2, 6):
+                    L.append(f"variable w{k}f{c} equal f_w{k}[{c}]")
+                    cols.append(f"${{w{k}f{c}}}")
+            L.append("variable ke equal ke")
+            L.append(f"fix rec all print {every} \"${{ke}} {' '.join(cols)}\" file walls.txt screen no title none")
+            L.append("compute pg all pair/gran/local id pos force_normal force_tangential delta")
+            L.append("compute wg all wall/gran/local id pos force_normal force_tangential delta")
+            f16 = " ".join(["%.17g"] * 16)
+            L.append(f"dump dc all local {every} contacts.txt " + " ".join(f"c_pg[{c}]" for c in range(1, 17)))
+            L.append(f'dump_modify dc format "{f16}"')
+            L.append(f"dump dw all local {every} wallcontacts.txt " + " ".join(f"c_wg[{c}]" for c in range(1, 17)))
+            L.append(f'dump_modify dw format "{f16}"')
+            L.append(f"dump dp all custom {every} particles.txt id x y vx vy omegaz radius")
+            L.append('dump_modify dp sort id format "%d %.17g %.17g %.17g %.17g %.17g %.17g"')
+        L.append("thermo_style custom step atoms ke")
+        L.append("thermo 1000")
+        L.append(f"run {int(S['n_steps'])}")
+        L.append("print \"DEMFLOW-COMPLETE\"")
+        deck = deckdir / "deck.in"
+        deck.write_text("\n".join(L) + "\n")
+        atomic_json(deckdir / "scene.json", S)
+        return [deck, deckdir / "scene.json"] + [deckdir / f"w{k}.stl" for k in range(len(S["walls"]))]
+
+    @staticmethod
+    def _p_at(w, step, dt):
+        px, py = w["px"], w["py"]
+        s0 = 0
+        for ph in w["phases"]:
+            k = max(0, min(ph["cycles"], step - s0))
+            if ph["omega"] and k > 0:
+                raise EngineUnsupported("a rotation about P after another rotation is not expressed")
+            px += ph["vx"] * dt * k
+            py += ph["vy"] * dt * k
+            s0 += ph["cycles"]
+        return [px, py]
+
+    def command(self, deckdir: Path):
+        return ["stdbuf", "-o0", "-e0", self.path(), "-in", "deck.in", "-log", "log.liggghts", "-echo", "none"]
+
+    def read(self, scene, sim, outdir: Path):
+        outdir = Path(outdir)
+        log = outdir / "log.liggghts"
+        if not log.exists() or "DEMFLOW-COMPLETE" not in log.read_text(errors="replace"):
+            raise EngineOutputError(f"LIGGGHTS did not complete scene {scene.name!r} (no completion mark in {log}); "
+                                    "the output is truncated; rerun the engine")
+        try:
+            walls = np.loadtxt(outdir / "walls.txt", ndmin=2)
+            pairs = _read_local(outdir / "contacts.txt", 16)
+            wallc = _read_local(outdir / "wallcontacts.txt", 16)
+            parts = _read_local(outdir / "particles.txt", 7, atoms=True)
+        except (OSError, ValueError) as e:
+            raise EngineOutputError(f"LIGGGHTS output in {outdir} is missing or truncated ({e}); rerun the engine") from None
+        every = max(int(scene.outputs.every), 1)
+        n, nw = sim.n, sim.nw
+        steps = every * np.arange(1, walls.shape[0] + 1, dtype=np.int64)
+        if walls.shape[1] != 1 + 3 * nw:
+            raise EngineOutputError(f"LIGGGHTS walls.txt has {walls.shape[1]} columns, expected {1 + 3 * nw}")
+        wall = walls[:, 1:].reshape(-1, nw, 3)
+        ppos = _wall_p_history(sim, steps)
+        track = np.zeros((len(steps), len(sim.track), 2))
+        for q, st in enumerate(steps):
+            for t, (a, b) in enumerate(sim.track):
+                track[q, t] = _pair_from_dumps(pairs.get(int(st)), wallc.get(int(st)), a, b, n)
+        snaps = []
+        for st in scene.outputs.snapshots:
+            st = int(st)
+            if st not in parts:
+                continue
+            p = parts[st]
+            order = np.argsort(p[:, 0])
+            p = p[order]
+            prt = np.c_[p[:, 1], p[:, 2], np.full(len(p), np.nan), p[:, 3], p[:, 4], p[:, 5], p[:, 6]]
+            cons = []
+            for row in pairs.get(st, np.zeros((0, 16))):
+                i1, i2 = int(row[6]) - 1, int(row[7]) - 1
+                r = sim.r
+                a, b = (i1, i2) if (r[i1] > r[i2] or (r[i1] == r[i2] and i1 < i2)) else (i2, i1)
+                fn, fs, ex, ey = _decompose(row[9:11], row[12:14], row[3:5] - row[0:2], a == i1)
+                cons.append([a, b, 0.5 * (row[0] + row[3]), 0.5 * (row[1] + row[4]), ex, ey, fn, fs, row[15]])
+            for row in wallc.get(st, np.zeros((0, 16))):
+                w, a = int(row[6]), int(row[8]) - 1
+                fn, fs, ex, ey = _decompose(row[9:11], row[12:14], row[0:2] - row[3:5], True)
+                cons.append([a, n + w, row[0], row[1], ex, ey, fn, fs, row[15]])
+            pw = _wall_p_history(sim, np.array([st]))[0]
+            geo = [[pw[w, 0], pw[w, 1], np.nan, np.nan] for w in range(nw)]
+            snaps.append(dict(step=st, particles=prt.tolist(), contacts=cons, walls=geo))
+        return results_from_records(sim, engine="liggghts", steps=steps, wall=wall, wallpos=ppos, track=track,
+                                    kinetic=walls[:, 0], snapshots=snaps)
+
+
+def _decompose(fnv, ftv, d, on_finder):
+    """fn, fs (demflow sign convention) and ε from the normal and tangential force on atom 1.
+
+    d: vector from the finder towards the other body; on_finder: atom 1 is the finder.
+    """
+    fn = float(np.hypot(*fnv))
+    L = float(np.hypot(*d))
+    ex, ey = d / L if L > 0 else (np.nan, np.nan)
+    tx, ty = ey, -ex
+    ft_on_finder = np.asarray(ftv) if on_finder else -np.asarray(ftv)
+    fs = -(ft_on_finder[0] * tx + ft_on_finder[1] * ty)
+    return fn, fs, ex, ey
+
+
+def _pair_from_dumps(prow, wrow, a, b, n):
+    if b >= n:
+        rows = wrow if wrow is not None else np.zeros((0, 16))
+        for row in rows:
+            if int(row[6]) == b - n and int(row[8]) - 1 == a:
+                fn, fs, _, _ = _decompose(row[9:11], row[12:14], row[0:2] - row[3:5], True)
+                return fn, fs
+        return 0.0, 0.0
+    rows = prow if prow is not None else np.zeros((0, 16))
+    for row in rows:
+        i1, i2 = int(row[6]) - 1, int(row[7]) - 1
+        if {i1, i2} == {a, b}:
+            d = (row[3:5] - row[0:2]) if i1 == a else (row[0:2] - row[3:5])
+            fn, fs, _, _ = _decompose(row[9:11], row[12:14], d, i1 == a)
+            return fn, fs
+    return 0.0, 0.0
+
+
+def _read_local(path: Path, ncol: int, atoms: bool = False) -> dict:
+    """Parse a LAMMPS-style dump into {timestep: array (rows, ncol)}."""
+    out = {}
+    lines = Path(path).read_text().splitlines()
+    k = 0
+    while k < len(lines):
+        if lines[k].startswith("ITEM: TIMESTEP"):
+            step = int(lines[k + 1])
+            count = int(lines[k + 3])
+            k += 4
+            while not lines[k].startswith("ITEM: ENTRIES") and not lines[k].startswith("ITEM: ATOMS"):
+                k += 1
+            rows = [list(map(float, ln.split())) for ln in lines[k + 1:k + 1 + count]]
+            if len(rows) != count or any(len(r) != ncol for r in rows):
+                raise ValueError(f"{path.name}: step {step} has {len(rows)} of {count} rows")
+            out[step] = np.array(rows).reshape(count, ncol)
+            k += 1 + count
+        else:
+            k += 1
+    return out
+
+
+def _wall_p_history(sim, steps):
+    """Each wall's reference point P after each step in ``steps`` (demflow's kinematics)."""
+    from ..walls import move_walls, set_wall_velocities
+
+    s = sim
+    wpx, wpy, wex, wey = (np.array(a, dtype=np.float64) for a in (s.wpx, s.wpy, s.wex, s.wey))  # sim is un-run
+    wvx, wvy, wom = np.zeros(s.nw), np.zeros(s.nw), np.zeros(s.nw)
+    wcx, wcy = wpx.copy(), wpy.copy()
+    out = np.zeros((len(steps), s.nw, 2))
+    want = {int(st): q for q, st in enumerate(steps)}
+    last = int(max(steps)) if len(steps) else 0
+    for st in range(last + 1):
+        if st in want:
+            out[want[st], :, 0] = wpx
+            out[want[st], :, 1] = wpy
+        set_wall_velocities(st, np.zeros((s.nw, 3)), wpx, wpy, wvx, wvy, wom, wcx, wcy, s.phase_start, s.phase_end,
+                            s.phase_vx, s.phase_vy, s.phase_om, s.phase_cx, s.phase_cy, s.phase_about_p,
+                            np.zeros(s.nw, np.int8), s.servo_start, s.servo_F, s.servo_dx, s.servo_dy, s.servo_G,
+                            s.servo_vmax)
+        move_walls(wpx, wpy, wex, wey, s.wh1, s.wh2, wvx, wvy, wom, wcx, wcy, s.dt)
+    return out

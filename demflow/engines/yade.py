@@ -1,0 +1,137 @@
+"""YADE (Debian package ``yade``, 2023.02a): deck writer, runner and reader.
+
+How a demflow scene is expressed (see :mod:`demflow.engines.equivalence`):
+discs are spheres with ``blockedDOFs = 'zXY'`` given the disc mass ρπR² and inertia ½mR²;
+contact values per material pair are split into per-material ``ViscElMat`` values that YADE
+combines in series (k = k₁k₂/(k₁+k₂)) and friction angles it combines by the minimum;
+walls are fixed boxes moved kinematically; global damping is applied as the extra force that
+turns YADE's explicit update into thesis eq 2.27.  The normal force is kN × overlap
+(demflow ``ContactModel(normal="overlap")``) and sliding follows the C&S rule.
+"""
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import subprocess
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from .base import Engine, EngineOutputError, EngineUnsupported, atomic_json, scene_numbers
+from .tables import results_from_records
+
+
+def split_in_series(pairs: dict, disc_mats: list, wall_mats: list, key: str) -> dict:
+    """Per-material values v_m such that v_a v_b / (v_a + v_b) equals each pair's value.
+
+    Disc materials get twice their self-contact value; each wall material is solved from its
+    contact with the first disc material and every other pair is checked.
+    """
+    vals = {}
+    for d in disc_mats:
+        vals[d] = 2.0 * pairs[(d, d)][key] if (d, d) in pairs else None
+    ref = next((d for d in disc_mats if vals[d] is not None), None)
+    for d in disc_mats:
+        if vals[d] is None:  # a disc material with no self contact: fit it to the reference disc material
+            pv = pairs[(ref, d)][key]
+            vals[d] = 0.0 if pv == 0 else _partner(vals[ref], pv, key)
+    for w in wall_mats:
+        d = disc_mats[0]
+        pv = pairs[(d, w)][key]
+        vals[w] = 0.0 if pv == 0 else _partner(vals[d], pv, key)
+    for (a, b), law in pairs.items():
+        va, vb = vals[a], vals[b]
+        got = 0.0 if va == 0 or vb == 0 else va * vb / (va + vb)
+        if not math.isclose(got, law[key], rel_tol=1e-12, abs_tol=0.0):
+            raise EngineUnsupported(
+                f"YADE combines {key} in series per material; no per-material values reproduce pair "
+                f"({a}, {b}) {key}={law[key]} together with the other pairs")
+    return vals
+
+
+def _partner(v_known, v_pair, key):
+    if v_known is None or v_known <= v_pair:
+        raise EngineUnsupported(f"YADE cannot express pair {key}={v_pair} against a material value {v_known}")
+    return v_known * v_pair / (v_known - v_pair)
+
+
+class YadeEngine(Engine):
+    name = "yade"
+    executable = "yade"
+    package = "yade"
+
+    def version(self) -> str:
+        out = subprocess.run([self.path(), "--version"], capture_output=True, text=True, timeout=60)
+        for line in out.stdout.splitlines():
+            if "version" in line.lower() or line.strip()[:1].isdigit():
+                return line.strip()
+        return out.stdout.strip()[:80]
+
+    def write_deck(self, scene, sim, deckdir: Path):
+        S = scene_numbers(scene, sim)
+        if S["normal"] != "overlap" or S["sliding"] != "cs":
+            # recorded in meta; the equivalence table names the difference
+            S["model_note"] = "YADE computes N = kN·δ and the C&S sliding rule"
+        pairs = {}
+        for key, law in S["laws"].items():
+            a, b = key.split("|")
+            if law["coh"] != 0:
+                raise EngineUnsupported("YADE's ViscEl law has no cohesion; remove it for a YADE run")
+            pairs[(a, b)] = law
+            pairs[(b, a)] = law
+        disc_mats = sorted(set(S["discs"]["material"]))
+        wall_mats = sorted({w["material"] for w in S["walls"]} - set(disc_mats))
+        ym = {m: {} for m in disc_mats + wall_mats}
+        for key in ("kn", "ks", "cn", "cs"):
+            vals = split_in_series({k: v for k, v in pairs.items()}, disc_mats, wall_mats, key)
+            for m in ym:
+                ym[m][key] = vals[m]
+        # friction: the pair uses the smaller of the two angles
+        for m in ym:
+            ym[m]["phi"] = math.pi / 2
+        for (a, b), law in pairs.items():
+            phi = math.atan(law["mu"])
+            for m in (a, b):
+                ym[m]["phi"] = min(ym[m]["phi"], phi)
+        for (a, b), law in pairs.items():
+            if not math.isclose(math.tan(min(ym[a]["phi"], ym[b]["phi"])), law["mu"], rel_tol=1e-12, abs_tol=1e-15):
+                raise EngineUnsupported(f"YADE takes the smaller friction angle of two materials; pair ({a}, {b}) "
+                                        f"tan φ = {law['mu']} cannot be expressed with the other pairs")
+        for m in S["materials"]:
+            ym.setdefault(m, dict(kn=0.0, ks=0.0, cn=0.0, cs=0.0, phi=0.0))
+        S["yade_materials"] = ym
+        # walls: which side are the discs on? (the box is put on the other side)
+        x = np.asarray(S["discs"]["x"])
+        y = np.asarray(S["discs"]["y"])
+        for w in S["walls"]:
+            nx, ny = -w["ey"], w["ex"]
+            side = np.sign(np.mean((x - w["px"]) * nx + (y - w["py"]) * ny)) or 1.0
+            w["nx_in"], w["ny_in"] = float(side * nx), float(side * ny)
+        S["wall_thickness"] = float(np.mean(S["discs"]["r"]))
+        atomic_json(deckdir / "scene.json", S)
+        deck = deckdir / "deck.py"
+        deck.write_text(resources.files("demflow.engines.decks").joinpath("yade_discs2d.py").read_text())
+        return [deck, deckdir / "scene.json"]
+
+    def command(self, deckdir: Path):
+        return [self.path(), "-n", "-j1", "-x", "deck.py"]
+
+    def read(self, scene, sim, outdir: Path):
+        f = Path(outdir) / "yade_out.json"
+        if not f.exists():
+            raise EngineOutputError(f"YADE wrote no output ({f} missing); see {Path(outdir) / 'engine.log'}")
+        try:
+            out = json.loads(f.read_text())
+        except json.JSONDecodeError as e:
+            raise EngineOutputError(f"YADE output {f} is truncated or corrupt ({e}); rerun the engine") from None
+        if not out.get("complete"):
+            raise EngineOutputError(f"YADE output {f} is incomplete; rerun the engine")
+        rec = out["rec"]
+        return results_from_records(
+            sim, engine="yade", steps=np.asarray(rec["step"], dtype=np.int64),
+            wall=np.asarray(rec["wall"], dtype=float).reshape(len(rec["step"]), sim.nw, 3),
+            wallpos=np.asarray(rec["wallpos"], dtype=float).reshape(len(rec["step"]), sim.nw, 2),
+            track=np.asarray(rec["track"], dtype=float).reshape(len(rec["step"]), len(sim.track), 2),
+            kinetic=np.asarray(rec["kinetic"], dtype=float), snapshots=out["snapshots"])
