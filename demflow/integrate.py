@@ -27,43 +27,16 @@ def critical_time_step(mass: np.ndarray, stiffness_max: float) -> float:
     return 2.0 * math.sqrt(float(mass.min()) / stiffness_max)
 
 
-@njit_parallel
-def central_difference(x, y, th, vx, vy, om, Fx, Fy, M, mass, inertia, C, Cr, gx, gy, dt,
-                       xref, yref, d2):
-    """Advance velocities to t+Δt/2 and positions to t+Δt in place (eqs 2.27-2.30).
-
-    d2 (work array) receives each disc's squared displacement since (xref, yref), the
-    positions at the last neighbour-list build; the largest is returned.
-    """
-    n = x.shape[0]
-    for i in prange(n):
-        a = C[i] * dt / (2.0 * mass[i])
-        vxi = (vx[i] * (1.0 - a) + (Fx[i] / mass[i] + gx) * dt) / (1.0 + a)
-        vyi = (vy[i] * (1.0 - a) + (Fy[i] / mass[i] + gy) * dt) / (1.0 + a)
-        b = Cr[i] * dt / (2.0 * inertia[i])
-        omi = (om[i] * (1.0 - b) + M[i] * dt / inertia[i]) / (1.0 + b)
-        vx[i] = vxi
-        vy[i] = vyi
-        om[i] = omi
-        x[i] += vxi * dt
-        y[i] += vyi * dt
-        th[i] += omi * dt
-        ddx = x[i] - xref[i]
-        ddy = y[i] - yref[i]
-        d2[i] = ddx * ddx + ddy * ddy
-    return d2.max() if n > 0 else 0.0
-
 
 @njit_parallel
 def sum_and_integrate(start, sidx, f, r, x, y, th, vx, vy, om, mass, inertia, C, Cr, gx, gy, dt,
                       xref, yref, P, Fx, Fy, M):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
-    The per-disc sums are those of :func:`demflow.contacts.forces.particle_sums` (same
-    contacts, same order): ``sidx[e]`` is the contact index k when the disc is the pair's
+    Each disc sums its contacts in CSR order: ``sidx[e]`` is the contact index k when the disc is the pair's
     finder and -(k+1) when it is the other disc; f[k] = (fx, fy, Fs) from
     :func:`demflow.contacts.forces.contact_forces_step`, the moment being Fs·R of the disc.
-    The update is :func:`central_difference`'s; the new x, y, v, ω are also written to the
+    The update is thesis eqs 2.27-2.30 (see the module docstring); the new x, y, v, ω are also written to the
     packed rows P (see :func:`demflow.contacts.forces.pack_discs`), the sums to Fx, Fy, M.
     Returns the largest squared displacement since (xref, yref) and the largest squared
     displacement of this step in radii ((|v|Δt/R)², a disc that jumps a large part of its

@@ -11,9 +11,9 @@ Per step: the pair forces (one parallel pass over the pair list, writing only wh
 later stages read unless the step records), the wall reactions (over the wall pairs
 only), the records, the wall velocities, then the force sums and the central-difference
 update of every disc fused in one parallel pass over the discs.  The order of every
-floating-point operation is that of the reference kernels (contact_forces,
-particle_sums, wall_sums, central_difference), so results are the same to the bit and
-do not depend on the number of threads.
+floating-point operation is that of the original separate kernels (pair forces, per-disc
+sums in the CSR order, thesis eqs 2.27-2.30; commit ff80386), so results are the same to
+the bit and do not depend on the number of threads.
 """
 from __future__ import annotations
 
@@ -54,34 +54,11 @@ def find_pair(finder, other, a, b, n_keys):
     return -1
 
 
-@njit
-def elastic_energy(finder, other, hist, ovl, mat, wmat, n, kn, ks, has_shear):
-    """Energy stored in the contact springs, Σ N²/2kN + S²/2kS [force·length]."""
-    e = 0.0
-    for k in range(finder.shape[0]):
-        if ovl[k] <= 0.0:
-            continue
-        i = finder[k]
-        j = other[k]
-        mb = wmat[j - n] if j >= n else mat[j]
-        e += 0.5 * hist[k, 0] ** 2 / kn[mat[i], mb]
-        if has_shear and ks[mat[i], mb] > 0.0:
-            e += 0.5 * hist[k, 1] ** 2 / ks[mat[i], mb]
-    return e
-
-
-@njit
-def kinetic_energy(vx, vy, om, mass, inertia):
-    """½Σ(m v² + I ω²) with the half-step velocities [force·length]."""
-    e = 0.0
-    for i in range(vx.shape[0]):
-        e += 0.5 * (mass[i] * (vx[i] ** 2 + vy[i] ** 2) + inertia[i] * om[i] ** 2)
-    return e
 
 
 @njit
 def kinetic_energy_perm(vx, vy, om, mass, inertia, inv):
-    """:func:`kinetic_energy` of discs stored in slots (disc i in slot inv[i]), summed in
+    """½Σ(m v² + I ω²) [force·length] of discs stored in slots (disc i in slot inv[i]), summed in
     disc order (the same sum to the bit)."""
     e = 0.0
     for i in range(inv.shape[0]):
@@ -92,7 +69,7 @@ def kinetic_energy_perm(vx, vy, om, mass, inertia, inv):
 
 @njit
 def elastic_energy_perm(finder, other, pos, hist, ovl, mat, wmat, n, kn, ks, has_shear):
-    """:func:`elastic_energy` with pair k's history and overlap in row pos[k], summed in
+    """Energy in the contact springs, Σ N²/2kN + S²/2kS [force·length], with pair k's history and overlap in row pos[k], summed in
     key order (the same sum to the bit)."""
     e = 0.0
     for k in range(finder.shape[0]):

@@ -1,10 +1,10 @@
 """Contact forces on every listed pair, and their sums per disc and per wall.
 
 ``contact_forces`` evaluates every pair of the neighbour list in parallel (one pair, one
-iteration: no write conflicts), storing the force on the pair's finder; ``particle_sums``
-gathers them per disc through the CSR list (each disc sums its own contacts, again with
-no conflicts, and in a fixed order: results do not depend on the thread count);
-``wall_sums`` adds the reactions on each wall.
+iteration: no write conflicts), storing the force on the pair's finder and every per-pair
+output (used for snapshots); each disc then sums its own contacts through the CSR list
+(:func:`demflow.integrate.sum_and_integrate`, no conflicts, fixed order: results do not
+depend on the thread count); :func:`wall_sums_listed` adds the reactions on each wall.
 
 The calculation cycle (:func:`demflow.stepping.run_steps`) uses the leaner
 :func:`contact_forces_step`: the same arithmetic, but per pair it stores only what the
@@ -156,48 +156,6 @@ def contact_forces(finder, other, hist, x, y, r, vx, vy, om, mat, n,
     return nbad
 
 
-@njit_parallel
-def particle_sums(start, idx, side, fx, fy, mi, mj, Fx, Fy, M):
-    """Sum the contact forces and moments on each disc (the force on the other disc of a
-    pair is minus the force on its finder, Newton's third law)."""
-    n = Fx.shape[0]
-    for i in prange(n):
-        sx = 0.0
-        sy = 0.0
-        sm = 0.0
-        for e in range(start[i], start[i + 1]):
-            k = idx[e]
-            if side[e] == 0:
-                sx += fx[k]
-                sy += fy[k]
-                sm += mi[k]
-            else:
-                sx -= fx[k]
-                sy -= fy[k]
-                sm += mj[k]
-        Fx[i] = sx
-        Fy[i] = sy
-        M[i] = sm
-
-
-@njit
-def wall_sums(finder, other, n, fx, fy, ovl, cpx, cpy, wpx, wpy, out):
-    """Force of the discs on each wall and its moment about the wall's point P.
-
-    out[w] = (Fx, Fy, M_P) [force, force, force·length], counter-clockwise moment positive.
-    """
-    out[:, :] = 0.0
-    for k in range(finder.shape[0]):
-        j = other[k]
-        if j < n or ovl[k] <= 0.0:
-            continue
-        w = j - n
-        Fwx = -fx[k]
-        Fwy = -fy[k]
-        out[w, 0] += Fwx
-        out[w, 1] += Fwy
-        out[w, 2] += (cpx[k] - wpx[w]) * Fwy - (cpy[k] - wpy[w]) * Fwx
-    return out
 
 
 @njit_parallel
@@ -307,7 +265,8 @@ def contact_forces_step(finder, other, hist, P, n,
 
 @njit
 def wall_sums_listed(wall_pairs, other, n, f, ovl, cpx, cpy, wpx, wpy, out):
-    """:func:`wall_sums` over the wall pairs only (``wall_pairs``: their indices k, in
+    """Force of the discs on each wall and its moment about the wall point P, out[w] = (Fx, Fy,
+    M_P), summed over the wall pairs only (``wall_pairs``: their indices k, in
     increasing order, so the sums are the same to the bit); f as in contact_forces_step."""
     out[:, :] = 0.0
     for q in range(wall_pairs.shape[0]):

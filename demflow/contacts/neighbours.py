@@ -271,39 +271,10 @@ def transfer_history(old_finder, old_other, old_hist, new_finder, new_other, n_k
     return out
 
 
-@njit
-def contacts_of_particles(finder, other, n):
-    """CSR list of the contacts of each disc: (start[n+1], contact index, side).
-
-    side 0: the disc is the pair's finder (force as computed), 1: it is the other disc
-    (equal and opposite force, thesis eq 2.20 moment with its own radius).
-    """
-    m = finder.shape[0]
-    count = np.zeros(n + 1, np.int64)
-    for k in range(m):
-        count[finder[k] + 1] += 1
-        if other[k] < n:
-            count[other[k] + 1] += 1
-    start = np.cumsum(count)
-    fill = start[:-1].copy()
-    idx = np.empty(start[n], np.int64)
-    side = np.empty(start[n], np.int8)
-    for k in range(m):
-        i = finder[k]
-        idx[fill[i]] = k
-        side[fill[i]] = 0
-        fill[i] += 1
-        j = other[k]
-        if j < n:
-            idx[fill[j]] = k
-            side[fill[j]] = 1
-            fill[j] += 1
-    return start, idx, side
-
 
 @njit
 def contacts_of_particles_signed(finder, other, n):
-    """:func:`contacts_of_particles` with the side folded into the index: (start, sidx),
+    """CSR list of the contacts of each disc, (start[n+1], sidx),
     sidx = k where the disc is the finder of pair k, -(k+1) where it is the other disc."""
     m = finder.shape[0]
     count = np.zeros(n + 1, np.int64)
