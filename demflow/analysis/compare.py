@@ -62,11 +62,16 @@ def compare_curves(xa, ya, xb, yb, n=200):
 
 
 def compare_distributions(a, b, bins=20, range_=None):
-    """Histograms on common bins and the two-sample Kolmogorov-Smirnov test (scipy.stats.ks_2samp)."""
+    """Histograms on common bins, the two-sample Kolmogorov-Smirnov test (scipy.stats.ks_2samp)
+    and, for normalised contact forces f = F/<F>, the q-model N (with its CI) of each sample."""
+    from .forces import fit_q_model
+
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     range_ = range_ or (min(a.min(), b.min()), max(a.max(), b.max()))
     ha, edges = np.histogram(a, bins=bins, range=range_, density=True)
     hb, _ = np.histogram(b, bins=edges, density=True)
     ks = stats.ks_2samp(a, b)
-    return dict(edges=edges, pdf_a=ha, pdf_b=hb, ks_statistic=float(ks.statistic), ks_pvalue=float(ks.pvalue))
+    qa, qb = fit_q_model(a / a.mean()), fit_q_model(b / b.mean())
+    return dict(edges=edges, pdf_a=ha, pdf_b=hb, ks_statistic=float(ks.statistic), ks_pvalue=float(ks.pvalue),
+                q_model_a=(qa.N, qa.ci), q_model_b=(qb.N, qb.ci))
