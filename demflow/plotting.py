@@ -54,3 +54,13 @@ def contact_force_diagram(results, step=None, ax=None, max_width=None, color="k"
     ax.set_xticks([])
     ax.set_yticks([])
     return ax
+
+
+def save_figure(fig, path, dpi=110) -> str:
+    """Lay out, write and close a figure; returns the path (for a case's list of figures)."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return str(path)

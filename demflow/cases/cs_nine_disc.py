@@ -34,6 +34,7 @@ import numpy as np
 
 from ..scene import (Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene, Wall)
 from .base import Case, Check
+from ..plotting import save_figure
 
 R = 50.0
 RHO = 1000.0
@@ -200,10 +201,8 @@ class NineDisc(Case):
             ax.set_xlabel("cycles")
             ax.set_ylabel("force at C")
             ax.legend(fontsize=6)
-        fig.tight_layout()
         path = f"{outdir}/contact_c.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         paths.append(path)
         fig, axs = plt.subplots(1, 2, figsize=(8, 4))
         contact_force_diagram(results["damped"], ax=axs[0])
@@ -211,9 +210,7 @@ class NineDisc(Case):
         key = "distortion-phi30-ks1"
         contact_force_diagram(results[key], ax=axs[1])
         axs[1].set_title(f"distorted, {key} (C&S Fig. 8b)", fontsize=9)
-        fig.tight_layout()
         path = f"{outdir}/force_diagrams.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         paths.append(path)
         return paths

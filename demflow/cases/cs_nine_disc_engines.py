@@ -20,9 +20,10 @@ import dataclasses
 import numpy as np
 
 from ..analysis.compare import compare_series
-from ..scene import ContactModel, Outputs
+from ..scene import ContactModel
 from .base import Case, Check
 from .cs_nine_disc import NineDisc, contact_c_force
+from ..plotting import save_figure
 
 CASE = "cs-nine-disc"
 UNDAMPED = ("undamped", "undamped-frictionless", "speed-0.04-kn1.35e9", "speed-0.36-kn1.5e8", "speed-0.12-kn1.5e8")
@@ -137,9 +138,7 @@ class NineDiscEngines(Case):
             for ax in axs:
                 ax.set_xlabel("cycles")
                 ax.legend(fontsize=7)
-            fig.tight_layout()
             path = f"{outdir}/{variant}.png"
-            fig.savefig(path, dpi=100)
-            plt.close(fig)
+            save_figure(fig, path, dpi=100)
             paths.append(path)
         return paths

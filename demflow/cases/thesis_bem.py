@@ -25,9 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bem import FINE, TABLE, Domain, Problem, channel, circle, rectangle
+from ..bem import TABLE, Domain, Problem, channel, circle, rectangle
 from ..tolerances import TOLERANCES
 from .base import Case, Check
+from ..plotting import save_figure
 
 # Temporary home of the BEM tolerances (final home: demflow/tolerances.py, same names).
 
@@ -222,10 +223,8 @@ class CylinderMovingPlanes(_BEMCase):
         ax.set_xlabel("x / R")
         ax.set_ylabel("u / U on y = 0")
         ax.set_title("velocity on the symmetry axis (thesis Fig. 4.14)")
-        fig.tight_layout()
         path = f"{outdir}/axis_velocity.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         return figs + [path]
 
 
@@ -289,10 +288,8 @@ class FreeRectangle(_BEMCase):
         ax.set_xlabel("x / a")
         ax.set_ylabel("wall shear stress τ_w / (μU/a)")
         ax.set_title("shear stress along the top wall (thesis Fig. 4.17)")
-        fig.tight_layout()
         path = f"{outdir}/wall_shear.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         figs.append(path)
         pr = s.boundary_pressure()
         fig, ax = plt.subplots(figsize=(6, 3.5))
@@ -310,10 +307,8 @@ class FreeRectangle(_BEMCase):
         ax.set_ylabel("p / (μU/a)  (mean over channel boundary = 0)")
         ax.set_title("pressure on the walls and the particle (thesis Fig. 4.18)")
         ax.legend(fontsize=7)
-        fig.tight_layout()
         path = f"{outdir}/pressure.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         del part
         return figs + [path]
 
@@ -352,9 +347,7 @@ def _velocity_figure(s, xlim, ylim, title, path, nx=61, ny=25):
     ax.set_ylim(*ylim)
     ax.set_aspect("equal")
     ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
     return path
 
 
@@ -372,9 +365,7 @@ def _traction_figure(s, xlim, ylim, title, path):
     ax.set_ylim(*ylim)
     ax.set_aspect("equal")
     ax.set_title(title + " (t = σn, n out of the fluid)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
     return path
 
 

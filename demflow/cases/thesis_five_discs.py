@@ -21,6 +21,7 @@ import numpy as np
 
 from ..scene import Discs, GlobalDamping, LinearLaw, Material, Outputs, Scene, Wall
 from .base import Case, Check
+from ..plotting import save_figure
 
 W = 2400.0 * np.pi * 10.0  # one disc's weight [N]
 H = float(np.sqrt(4.0 - 1.5 ** 2))
@@ -152,7 +153,6 @@ class FiveDiscs(Case):
         cf = results["friction"].contacts
         for (label, a, b), (fn_ref, fs_ref) in zip(CONTACTS, TABLE_2_3):
             r = contact_row(cf, a, b)
-            sign = 1.0 if r.i == a else -1.0
             out.append(Check.against(f"Table 2.3 {label}: normal force [N]", r.fn, fn_ref,
                                      "five-discs.thesis-predicted", SRC3))
             out.append(Check.against(f"Table 2.3 {label}: |shear force| [N]", abs(r.fs), abs(fs_ref),
@@ -173,8 +173,6 @@ class FiveDiscs(Case):
             contact_force_diagram(results[name], ax=ax)
             ax.set_title(f"five discs, {name}: contact forces at t = {p['t_end']} s", fontsize=9)
             path = f"{outdir}/forces_{name}.png"
-            fig.tight_layout()
-            fig.savefig(path, dpi=110)
-            plt.close(fig)
+            save_figure(fig, path)
             paths.append(path)
         return paths

@@ -20,6 +20,7 @@ from scipy.integrate import solve_ivp
 
 from ..scene import ContactModel, Discs, LinearLaw, Material, Outputs, Scene
 from .base import Case, Check
+from ..plotting import save_figure
 
 SRC = "thesis Table 2.4, §2.2.5.3"
 RIGID = np.array([1.5 * np.sqrt(3.0), 1.5, -1.5 * np.sqrt(3.0), 4.5])  # v1x, v1y, v2x, v2y
@@ -120,7 +121,5 @@ class Impact(Case):
         ax.set_ylabel("contact force [N]")
         ax.set_title("impact of two discs: contact force (thesis Fig. 2.17)")
         path = f"{outdir}/contact_force.png"
-        fig.tight_layout()
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         return [path]

@@ -13,10 +13,10 @@ the report).
 """
 from __future__ import annotations
 
-import numpy as np
 
 from ..scene import Discs, GlobalDamping, LinearLaw, Material, Outputs, Scene, Wall
 from .base import Case, Check
+from ..plotting import save_figure
 
 WEIGHT = 75398.23  # N, thesis §2.2.5.1 (m g with m = 7539.823 kg)
 SRC = "thesis Table 2.1, §2.2.5.1"
@@ -84,7 +84,5 @@ class OneDisc(Case):
         ax.set_title("One disc on a plate (thesis Fig. 2.10)")
         ax.legend(fontsize=8)
         path = f"{outdir}/plate_force.png"
-        fig.tight_layout()
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         return [path]
