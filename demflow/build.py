@@ -140,6 +140,10 @@ def build(scene: Scene):
                 raise SceneError(
                     f"wall {w.name!r}: servo force={s.force}, gain={s.gain}, v_max={s.v_max}; all must be > 0"
                 )
+            for step, force in s.schedule:
+                if int(step) != step or step < 0 or not (math.isfinite(force) and force > 0):
+                    raise SceneError(f"wall {w.name!r}: servo schedule entry (step={step}, force={force}); "
+                                     "give a whole step >= 0 and a force > 0")
             if math.hypot(*s.direction) == 0:
                 raise SceneError(f"wall {w.name!r}: servo direction is zero; give the unit load direction")
 

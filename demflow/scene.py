@@ -145,6 +145,8 @@ class Servo:
     F_C the contact reaction along -direction; v = min(v_max, |G·err|)·sign(G·err) along
     ``direction``.  ``gain`` G [length/time], ``v_max`` [length/time].
     Active from step ``start`` (inclusive) on; before it the wall follows its phases.
+    ``schedule`` : ((step, force), ...) changes the target: from each ``step`` on, F_A is that
+    ``force`` [force] (a stress path, e.g. C&S's stage A → stage B).
     """
 
     force: float
@@ -152,6 +154,15 @@ class Servo:
     gain: float
     v_max: float
     start: int = 0
+    schedule: tuple[tuple[int, float], ...] = ()
+
+    def force_at(self, step: int) -> float:
+        """The target force F_A in effect at ``step``."""
+        f = self.force
+        for s, v in sorted(self.schedule):
+            if step >= s:
+                f = v
+        return float(f)
 
 
 @dataclass(frozen=True)

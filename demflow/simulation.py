@@ -199,13 +199,16 @@ class Simulation:
         rec_count = 0
         snaps = sorted(s for s in self.scene.outputs.snapshots if self.step <= s <= target)
         last_ckpt = self.step
+        changes = sorted({int(st) for w in self.scene.walls if w.servo is not None for st, _ in w.servo.schedule})
         while True:
             while snaps and snaps[0] == self.step:
                 self._take_snapshot()
                 snaps.pop(0)
             if self.step >= target:
                 break
-            stop = min(target, snaps[0] if snaps else target, self.step + self.CHUNK)
+            self._set_servo_targets()
+            nxt = [c for c in changes if c > self.step]
+            stop = min(target, snaps[0] if snaps else target, self.step + self.CHUNK, nxt[0] if nxt else target)
             good = self._copy_state()
             while self.step < stop:
                 done, status, self.disp_walls, rec_count = run_steps(
@@ -247,6 +250,12 @@ class Simulation:
         if checkpoint is not None:
             self.save_checkpoint(checkpoint)
         return self
+
+    def _set_servo_targets(self):
+        """Servo targets F_A in effect at the current step (Servo.schedule)."""
+        for w, wall in enumerate(self.scene.walls):
+            if wall.servo is not None:
+                self.servo_F[w] = wall.servo.force_at(self.step)
 
     def _store_records(self, q, rec_step, rec_wall, rec_wallpos, rec_track, rec_energy):
         if q:

@@ -65,6 +65,11 @@ TOLERANCES = {
         absolute=True),
     "bem.mesh-converged": Tolerance(
         2e-3, "Richardson estimate of the remaining discretisation error of a case's finest mesh (measured ≤ 7e-4, O(h²))."),
+    "photoelastic.equilibrium": Tolerance(
+        0.03, "Acceptance of issue 6: ΔF/F (largest resultant force on a disc / largest contact force, C&S Table 1 "
+              "note 2) below 3 % at each stage; C&S had 0.1-2.6 %.", absolute=True),
+    "photoelastic.servo-hold": Tolerance(
+        0.01, "Acceptance of issue 6: the servo walls hold the experiment's F_H/F_V (0.39; stage B 0.3322) within 1 %."),
 }
 
 

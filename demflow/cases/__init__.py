@@ -10,9 +10,10 @@ from .thesis_five_discs import FiveDiscs
 from .thesis_impact import Impact
 from .cs_nine_disc import NineDisc
 from .cs_nine_disc_engines import NineDiscEngines
+from .cs_photoelastic import Photoelastic
 from .thesis_bem import CylinderMovingPlanes, CylinderPoiseuille, FreeRectangle
 
-CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(),
+CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
 
 

@@ -122,10 +122,12 @@ class LiggghtsEngine(Engine):
         dt = S["dt"]
         n = S["n_discs"]
         big = n > READ_DATA_ABOVE
-        if big:  # LIGGGHTS's mesh neighbour bins fail an assertion (region_neighbor_list_I.h:165) when
-            # the periodic z span is small against the walls' length: 0.25 x the box failed at 1e5
-            # discs, 0.5 x works at 2e3-1e5 (the nine-disc decks, 300 against 1200, keep their size)
-            zl = max(zl, 0.5 * max(hi[0] - lo[0], hi[1] - lo[1]))
+        span = max(hi[0] - lo[0], hi[1] - lo[1])
+        if big or zl < 0.25 * span:  # LIGGGHTS's mesh neighbour bins fail an assertion
+            # (region_neighbor_list_I.h:165) when the periodic z span is small against the walls' length:
+            # 0.25 x the box failed at 1e5 discs, 0.1 x at the 197-disc photoelastic box; 0.5 x works
+            # at 197-1e5 discs (the nine-disc decks, 300 against 1200, keep their size)
+            zl = max(zl, 0.5 * span)
         L = [
             "# demflow deck for LIGGGHTS-PUBLIC 3.8.0: 2D discs, linear law, walls with prescribed motion",
             "atom_style granular", "atom_modify map array sort 0 0", "dimension 2", "boundary f f p", "newton off",

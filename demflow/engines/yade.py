@@ -88,13 +88,15 @@ class YadeEngine(Engine):
             vals = split_in_series({k: v for k, v in pairs.items()}, disc_mats, wall_mats, key)
             for m in ym:
                 ym[m][key] = vals[m]
-        # friction: the pair uses the smaller of the two angles
+        # friction: the pair uses the smaller of the two angles.  A material with a law against
+        # itself takes that angle; any other the smallest angle of its pairs (then checked)
         for m in ym:
-            ym[m]["phi"] = math.pi / 2
+            ym[m]["phi"] = math.atan(pairs[(m, m)]["mu"]) if (m, m) in pairs else math.pi / 2
         for (a, b), law in pairs.items():
             phi = math.atan(law["mu"])
             for m in (a, b):
-                ym[m]["phi"] = min(ym[m]["phi"], phi)
+                if (m, m) not in pairs:
+                    ym[m]["phi"] = min(ym[m]["phi"], phi)
         for (a, b), law in pairs.items():
             if not math.isclose(math.tan(min(ym[a]["phi"], ym[b]["phi"])), law["mu"], rel_tol=1e-12, abs_tol=1e-15):
                 raise EngineUnsupported(f"YADE takes the smaller friction angle of two materials; pair ({a}, {b}) "

@@ -56,8 +56,10 @@ def run_validation(names=None, outdir="reports/validation", overrides=None, case
         casedir = outdir / name
         casedir.mkdir(parents=True, exist_ok=True)
         figs = [Path(f).name for f in case.figures(results, p, str(casedir))]
+        tables = [dict(title=t, html=df.to_html(float_format=lambda v: f"{v:.4g}", border=0))
+                  for t, df in (case.tables(results, p) if hasattr(case, "tables") else [])]
         summary["cases"][name] = dict(
-            title=case.title, source=case.source, params=p, wall_time_s=round(wall, 3),
+            title=case.title, source=case.source, params=p, wall_time_s=round(wall, 3), tables=tables,
             passed=all(c.passed for c in checks), assumptions=list(case.assumptions), figures=figs,
             checks=[dict(name=c.name, value=c.value, reference=c.reference, error=c.error,
                          tolerance=c.tolerance, passed=c.passed, source=c.source, why=c.why,
@@ -101,6 +103,8 @@ def write_report(summary, outdir="reports/validation"):
             from ..engines.equivalence import as_html
 
             extra = f"<h2>Model-equivalence table</h2>{as_html()}"
+        for t in c.get("tables", []):  # pandas' to_html escapes the cells
+            extra += f"<h2>{html.escape(t['title'])}</h2>{t['html']}"
         figs = "".join(f"<p><img src='{html.escape(f)}'></p>" for f in c["figures"])
         params = html.escape(json.dumps(c["params"]))
         page = (f"<!doctype html><html><head><meta charset='utf-8'><title>{name}</title><style>{CSS}</style></head>"
