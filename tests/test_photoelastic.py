@@ -187,6 +187,8 @@ def test_stored_engine_references_start_from_the_same_packing_and_agree_in_distr
         assert stats.ks_2samp(mine["f"], st["f"]).pvalue >= 0.05
         assert lo <= st["q-model N"] <= hi
         assert st["F_H/F_V"] == pytest.approx(mine["F_H/F_V"], rel=0.05)
+        # every engine's contact table is in demflow's convention (n from i to j): discs balance
+        assert st["ΔF/F"] < tol("photoelastic.equilibrium").value, e
 
 
 def test_box_walls_close_the_box_at_any_stage():

@@ -280,7 +280,8 @@ class LiggghtsEngine(Engine):
                 i1, i2 = int(row[6]) - 1, int(row[7]) - 1
                 r = sim.r
                 a, b = (i1, i2) if (r[i1] > r[i2] or (r[i1] == r[i2] and i1 < i2)) else (i2, i1)
-                fn, fs, ex, ey = _decompose(row[9:11], row[12:14], row[3:5] - row[0:2], a == i1)
+                d = row[3:5] - row[0:2] if a == i1 else row[0:2] - row[3:5]  # from the finder a to b
+                fn, fs, ex, ey = _decompose(row[9:11], row[12:14], d, a == i1)
                 cons.append([a, b, 0.5 * (row[0] + row[3]), 0.5 * (row[1] + row[4]), ex, ey, fn, fs, row[15]])
             for row in wallc.get(st, np.zeros((0, 16))):
                 w, a = int(row[6]), int(row[8]) - 1
