@@ -311,7 +311,7 @@ def build(scene: Scene):
     normal_mode = NORMAL_INCREMENTAL if scene.contact_model.normal == "incremental" else NORMAL_OVERLAP
     sliding_mode = SLIDING_CS if scene.contact_model.sliding == "cs" else SLIDING_THESIS
 
-    return Simulation(
+    sim = Simulation(
         scene=scene, x=x, y=y, r=r, mass=mass, inertia=inertia, v=v, om=om,
         mat=np.array([mid[m] for m in mats], dtype=np.int64),
         wall_geo=wall_geo, wall_mat=np.array([mid[w.material] for w in scene.walls], dtype=np.int64),
@@ -319,3 +319,16 @@ def build(scene: Scene):
         gravity=tuple(map(float, scene.gravity)), normal_mode=normal_mode, sliding_mode=sliding_mode,
         track=track, material_names=mat_names, fluid=fluid,
     )
+    if fluid is not None:
+        # the fluid's own stability limit (explicit lagged drag, see demflow.coupling)
+        bound = sim.fluid.time_step_bound(sim)
+        sim.dt_fluid = bound
+        if scene.dt is None:
+            sim.dt = min(sim.dt, bound)
+        elif dt > bound and not scene.allow_supercritical:
+            raise SceneError(
+                f"dt={dt:.6g} is above the fluid drag limit {bound:.6g} = safety·2m/K (m the disc mass, K its "
+                f"self-resistance with a wall at the minimum gap {fluid.gap:.4g}; demflow.coupling): the lagged "
+                f"explicit drag would oscillate and grow. Use dt <= {bound:.6g}, a larger Fluid.min_gap, or set "
+                "allow_supercritical=True")
+    return sim

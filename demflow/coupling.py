@@ -24,7 +24,9 @@ Before each fluid solve (every ``stride`` DEM steps at most):
 Time step (thesis §5.2 found it "by trial and error").  Under a lagged explicit drag F = −K v a
 disc's velocity obeys v ← v + kΔt(W − K v)/m between solves, which is stable only for
 kΔt < 2τ with τ = m/K the relaxation time of its velocity under its drag (and monotone for
-kΔt < τ).  K is the disc's self-resistance: measured by BEM unit-velocity solves
+kΔt < τ); its spin likewise needs kΔt < 2I/K_rot (for a disc in an unbounded fluid
+K_rot = 4πμR², so I/K_rot = m/8πμ, shorter than m/K: rotation is the binding limit of a free
+disc).  K is the disc's self-resistance: measured by BEM unit-velocity solves
 (:func:`self_resistance`), and growing near a wall or a neighbour at gap h like the 2D
 lubrication resistance K_lub = 3√2π μ (R_e/h)^{3/2} (R_e = R_iR_j/(R_i+R_j), R_i for a wall).
 :func:`stable_stride` gives the number of DEM steps between solves that keeps kΔt <= safety·2τ;
@@ -162,8 +164,9 @@ class FluidCoupler:
         self.names = [sim.wall_names[w] for w in setup.boundary]
         self.solves = 0
         self.bem_s = 0.0
-        self.K0 = None  # self-resistance of each disc at the first solve (adaptive stride)
-        self.records = []  # (step, forces (n, 3), wall fluid force (nb, 2))
+        self.K0 = None  # self-resistance of each disc, initial configuration (time step, adaptive stride)
+        self.K0rot = None
+        self.records = []  # (step, forces (n, 3), wall fluid force (nb, 2), disc velocities seen (n, 3))
         self.strides = []  # (step, DEM steps to the next solve)
         self.pressure = []  # (step, wall name, x, y, s, p)
         self.last_r = None
@@ -258,24 +261,37 @@ class FluidCoupler:
             a = dom.a[e[0]]
             s = np.hypot(xy[:, 0] - a[0], xy[:, 1] - a[1])
             self.pressure.append((sim.step, name, xy[:, 0].copy(), xy[:, 1].copy(), s, p[nodes].copy()))
-        self.records.append((sim.step, out.copy(), wf))
+        self.records.append((sim.step, out.copy(), wf, np.column_stack([sim.vx, sim.vy, sim.om])))
 
     # ------------------------------------------------------------------ time step
     def self_resistance(self, sim):
-        """K_i [force/(length/time)]: the larger eigenvalue of each disc's 2×2 translational
-        self-resistance (force on disc i for unit velocity of disc i, everything else at rest),
-        by two BEM solves per disc in the current shrunk configuration."""
+        """(K, K_rot) per disc: K [force/(length/time)] the larger eigenvalue of the disc's 2×2
+        translational self-resistance (force on disc i for unit velocity of disc i, everything else
+        at rest) and K_rot [force·length·time] its rotational self-resistance (moment for unit ω),
+        by BEM solves in the current shrunk configuration (three per disc)."""
         dom, _, _, _ = self.domain(sim)
         K = np.zeros(sim.n)
+        Kr = np.zeros(sim.n)
         for i in range(sim.n):
             R = np.zeros((2, 2))
+            c_i = (sim.x[i], sim.y[i])
             for c in range(2):
                 pb = Problem(dom, self.setup.mu)
-                U = (1.0, 0.0) if c == 0 else (0.0, 1.0)
-                pb.rigid(f"d{i}", U=U, center=(sim.x[i], sim.y[i]))
+                pb.rigid(f"d{i}", U=(1.0, 0.0) if c == 0 else (0.0, 1.0), center=c_i)
                 R[:, c] = -pb.solve(quad=self.setup.quadrature).force(f"d{i}")
             K[i] = float(np.max(np.linalg.eigvalsh(0.5 * (R + R.T))))
-        return K
+            if self.setup.moments:
+                pb = Problem(dom, self.setup.mu)
+                pb.rigid(f"d{i}", omega=1.0, center=c_i)
+                Kr[i] = -pb.solve(quad=self.setup.quadrature).moment(f"d{i}", center=c_i)
+        return K, Kr
+
+    def _taus(self, sim, K):
+        """Relaxation time per disc [time]: min(m/K, I/K_rot) (rotation only when moments apply)."""
+        tau = sim.mass / np.maximum(K, 1e-300)
+        if self.setup.moments:
+            tau = np.minimum(tau, sim.inertia / np.maximum(self.K0rot, 1e-300))
+        return tau
 
     def resistance_estimate(self, sim):
         """Current self-resistance per disc: the measured K0 (first solve) plus the lubrication
@@ -283,7 +299,7 @@ class FluidCoupler:
         gaps of the first configuration are counted twice)."""
         st = self.setup
         if self.K0 is None:
-            self.K0 = self.self_resistance(sim)
+            self.K0, self.K0rot = self.self_resistance(sim)
         K = self.K0.copy()
         rp, gw, d = self.last_r, self.last_gw, self.last_dist
         for i in range(sim.n):
@@ -298,6 +314,20 @@ class FluidCoupler:
                 K[a] += lubrication_resistance(st.mu, re, max(h[a, b], st.gap))
         return K
 
+    def time_step_bound(self, sim):
+        """The largest DEM Δt [time] the lagged explicit drag tolerates anywhere in the run:
+        safety × 2 min_i τ_i with τ_i = min(m_i / (K0_i + K_lub(R_i, g)), I_i / K0rot_i), K0 the
+        measured self-resistance of the initial configuration and K_lub the lubrication resistance
+        of a wall at the minimum gap g (the closest a disc's BEM boundary can come to a wall, see
+        the module docstring)."""
+        st = self.setup
+        if sim.n == 0:
+            return math.inf
+        if self.K0 is None:
+            self.K0, self.K0rot = self.self_resistance(sim)
+        Kw = self.K0 + lubrication_resistance(st.mu, sim.r, st.gap)
+        return st.safety * 2.0 * float(np.min(self._taus(sim, Kw)))
+
     def stable_stride(self, sim):
         """DEM steps until the next solve: the largest k <= stride with kΔt <= safety·2·min τ_i,
         τ_i = m_i/K_i (see the module docstring); at least 1."""
@@ -305,7 +335,7 @@ class FluidCoupler:
         if not st.adaptive or sim.n == 0:
             return st.stride
         K = self.resistance_estimate(sim)
-        tau = float(np.min(sim.mass / np.maximum(K, 1e-300)))
+        tau = float(np.min(self._taus(sim, K)))
         self.last_tau = tau
         k = int(st.safety * 2.0 * tau / sim.dt)
         return max(1, min(st.stride, k))

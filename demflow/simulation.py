@@ -49,6 +49,7 @@ class Simulation:
         self.scene = scene
         self.dt = dt
         self.dt_crit = dt_crit
+        self.dt_fluid = None  # the fluid drag limit of a saturated scene (set by build)
         self.skin = skin
         self.has_shear = has_shear
         self.normal_mode = normal_mode

@@ -23,7 +23,8 @@ def scene(fluid=None, x=(0.0,), y=(0.0,), r=(0.5,), v=None, w=5.0, h=10.0, g=(0.
     return Scene(name="sat", discs=Discs(list(x), list(y), list(r), "disc", velocity=v),
                  materials={"disc": Material(2.0), "w": Material()},
                  laws={("disc", "w"): LinearLaw(kn=1e5), ("disc", "disc"): LinearLaw(kn=1e5)},
-                 walls=box_walls(w, h), gravity=g, dt=1e-4, fluid=fluid, outputs=Outputs(every=1), **kw)
+                 walls=box_walls(w, h), gravity=g, dt=1e-4, fluid=fluid, outputs=Outputs(every=1),
+                 allow_supercritical=True, **kw)
 
 
 def test_dry_scene_builds_nothing_fluid():

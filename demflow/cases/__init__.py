@@ -11,9 +11,11 @@ from .thesis_impact import Impact
 from .cs_nine_disc import NineDisc
 from .cs_nine_disc_engines import NineDiscEngines
 from .thesis_bem import CylinderMovingPlanes, CylinderPoiseuille, FreeRectangle
+from .thesis_falling_disc import FallingDisc
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
+CASES[FallingDisc.name] = FallingDisc()
 
 
 def get_case(name: str) -> Case:
