@@ -98,6 +98,87 @@ def _check_overlaps(x, y, r, walls, tol):
             )
 
 
+def _check_fluid(scene: Scene, x, y, r, wall_geo):
+    """Check a saturated scene's :class:`~demflow.scene.Fluid` and return the
+    :class:`~demflow.coupling.FluidSetup` the coupling needs."""
+    from .bem.geometry import points_in_polygon, signed_area
+    from .coupling import FluidSetup, outer_corners
+
+    f = scene.fluid
+
+    def positive(key, v, allow_zero=False):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and (v >= 0 if allow_zero else v > 0)):
+            raise SceneError(f"fluid {key}={v!r}; give a finite number {'>= 0' if allow_zero else '> 0'}")
+        return float(v)
+
+    def whole(key, v, lo):
+        if not (isinstance(v, (int, np.integer)) and v >= lo):
+            raise SceneError(f"fluid {key}={v!r}; give a whole number >= {lo}")
+        return int(v)
+
+    mu = positive("viscosity", f.viscosity)
+    rho = positive("density", f.density, allow_zero=True)
+    n_disc = whole("elements_per_disc", f.elements_per_disc, 8)
+    stride = whole("stride", f.stride, 1)
+    rec = whole("record_every", f.record_every, 1)
+    if not (0 < f.safety <= 1):
+        raise SceneError(f"fluid safety={f.safety}; give a fraction in (0, 1] of the drag stability limit 2τ")
+    n = r.shape[0]
+    r_min = float(r.min()) if n else 1.0
+    gap = 0.01 * r_min if f.min_gap is None else positive("min_gap", f.min_gap)
+    if gap >= 0.5 * r_min:
+        raise SceneError(f"fluid min_gap={gap} is not small against the smallest radius {r_min}; "
+                         "give a gap below half of it (thesis §5.3.3 used 0.01 r)")
+    h_max = float(r.mean()) if f.element_length is None else positive("element_length", f.element_length)
+    names = [w.name for w in scene.walls]
+    bnames = list(f.boundary) if f.boundary is not None else names
+    if len(bnames) < 3:
+        raise SceneError(f"fluid boundary has {len(bnames)} walls; the fluid needs at least 3 walls around it "
+                         "(give Fluid.boundary, the walls counter-clockwise around the fluid)")
+    for b in bnames:
+        if b not in names:
+            raise SceneError(f"fluid boundary names wall {b!r}, which the scene does not have (walls: {names})")
+    if len(set(bnames)) != len(bnames):
+        raise SceneError(f"fluid boundary {bnames} names a wall twice")
+    widx = np.array([names.index(b) for b in bnames], dtype=np.int64)
+    g = np.array(wall_geo, dtype=np.float64).reshape(-1, 8)
+    try:
+        corners = outer_corners(g[widx, 0:2], g[widx, 6:8])
+    except ValueError as e:
+        raise SceneError(f"fluid boundary {bnames}: {e}; list the walls in order around the fluid") from None
+    if signed_area(corners) <= 0:
+        raise SceneError(f"fluid boundary {bnames} runs clockwise (or is degenerate); list the walls "
+                         "counter-clockwise around the fluid (thesis §4.3.8)")
+    if n:
+        inside = points_in_polygon(np.column_stack([x, y]), corners)
+        if not np.all(inside):
+            k = int(np.flatnonzero(~inside)[0])
+            raise SceneError(f"disc {k} at ({x[k]:.6g}, {y[k]:.6g}) lies outside the fluid boundary {bnames}")
+    lw, lf, ld = [], [], []
+    for ld_ in f.loads:
+        if ld_.wall not in bnames:
+            raise SceneError(f"fluid load on wall {ld_.wall!r}: the wall is not on the fluid boundary {bnames}")
+        F = positive(f"load force on {ld_.wall!r}", ld_.force)
+        d = np.asarray(ld_.direction, dtype=float)
+        L = float(np.hypot(*d))
+        if not L > 0:
+            raise SceneError(f"fluid load on wall {ld_.wall!r}: direction {ld_.direction} is zero")
+        d = d / L
+        w = names.index(ld_.wall)
+        ex, ey = g[w, 6], g[w, 7]
+        if min(abs(d[0]), abs(d[1])) > 1e-12 or abs(d[0] * ex + d[1] * ey) > 1e-9:
+            raise SceneError(f"fluid load on wall {ld_.wall!r}: direction {tuple(d)} must be along x or y and "
+                             "perpendicular to the wall (the traction replaces one velocity component)")
+        lw.append(w)
+        lf.append(F)
+        ld.append(d)
+    return FluidSetup(mu=mu, rho=rho, boundary=widx, n_disc=n_disc, element_length=h_max, gap=gap,
+                      stride=stride, adaptive=bool(f.adaptive), safety=float(f.safety), moments=bool(f.moments),
+                      load_wall=np.array(lw, dtype=np.int64), load_force=np.array(lf, dtype=float),
+                      load_dir=np.array(ld, dtype=float).reshape(-1, 2), record_every=rec,
+                      quadrature=int(f.quadrature))
+
+
 def build(scene: Scene):
     """Check ``scene`` and return a ready :class:`~demflow.simulation.Simulation`."""
     from .simulation import Simulation
@@ -229,14 +310,29 @@ def build(scene: Scene):
             ia, ib = ib, ia
         track.append((ia, ib))
 
+    fluid = _check_fluid(scene, x, y, r, wall_geo) if scene.fluid is not None else None
+
     normal_mode = NORMAL_INCREMENTAL if scene.contact_model.normal == "incremental" else NORMAL_OVERLAP
     sliding_mode = SLIDING_CS if scene.contact_model.sliding == "cs" else SLIDING_THESIS
 
-    return Simulation(
+    sim = Simulation(
         scene=scene, x=x, y=y, r=r, mass=mass, inertia=inertia, v=v, om=om,
         mat=np.array([mid[m] for m in mats], dtype=np.int64),
         wall_geo=wall_geo, wall_mat=np.array([mid[w.material] for w in scene.walls], dtype=np.int64),
         tables=tables, has_shear=has_shear, dt=dt, dt_crit=dt_crit, C=C, Cr=Cr, skin=skin,
         gravity=tuple(map(float, scene.gravity)), normal_mode=normal_mode, sliding_mode=sliding_mode,
-        track=track, material_names=mat_names,
+        track=track, material_names=mat_names, fluid=fluid,
     )
+    if fluid is not None:
+        # the fluid's own stability limit (explicit lagged drag, see demflow.coupling)
+        bound = sim.fluid.time_step_bound(sim)
+        sim.dt_fluid = bound
+        if scene.dt is None:
+            sim.dt = min(sim.dt, bound)
+        elif dt > bound and not scene.allow_supercritical:
+            raise SceneError(
+                f"dt={dt:.6g} is above the fluid drag limit {bound:.6g} = safety·2m/K (m the disc mass, K its "
+                f"self-resistance with a wall at the minimum gap {fluid.gap:.4g}; demflow.coupling): the lagged "
+                f"explicit drag would oscillate and grow. Use dt <= {bound:.6g}, a larger Fluid.min_gap, or set "
+                "allow_supercritical=True")
+    return sim

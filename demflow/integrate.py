@@ -30,14 +30,17 @@ def critical_time_step(mass: np.ndarray, stiffness_max: float) -> float:
 
 @njit_parallel
 def sum_and_integrate(start, sidx, f, r, x, y, th, vx, vy, om, mass, inertia, C, Cr, gx, gy, dt,
-                      xref, yref, P, Fx, Fy, M):
+                      xref, yref, P, Fx, Fy, M, ext, ext_perm, has_ext):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
     Each disc sums its contacts in CSR order: ``sidx[e]`` is the contact index k when the disc is the pair's
     finder and -(k+1) when it is the other disc; f[k] = (fx, fy, Fs) from
     :func:`demflow.contacts.forces.contact_forces_step`, the moment being Fs·R of the disc.
     The update is thesis eqs 2.27-2.30 (see the module docstring); the new x, y, v, ω are also written to the
-    packed rows P (see :func:`demflow.contacts.forces.pack_discs`), the sums to Fx, Fy, M.
+    packed rows P (see :func:`demflow.contacts.forces.pack_discs`), the contact sums to Fx, Fy, M.
+    With ``has_ext`` the external force and moment ``ext[ext_perm[i]]`` = (fx, fy, m) (the fluid
+    force, moment and buoyancy of a saturated scene, thesis §3.4 and eq 4.39, in disc order,
+    ``ext_perm`` mapping slot to disc) is added to disc i's sums; without it ``ext`` is not read.
     Returns the largest squared displacement since (xref, yref) and the largest squared
     displacement of this step in radii ((|v|Δt/R)², a disc that jumps a large part of its
     radius in one step can pass through a contact unseen).
@@ -63,6 +66,11 @@ def sum_and_integrate(start, sidx, f, r, x, y, th, vx, vy, om, mass, inertia, C,
         Fx[i] = sx
         Fy[i] = sy
         M[i] = sm
+        if has_ext:
+            q = ext_perm[i]
+            sx += ext[q, 0]
+            sy += ext[q, 1]
+            sm += ext[q, 2]
         a = C[i] * dt / (2.0 * mass[i])
         vxi = (vx[i] * (1.0 - a) + (sx / mass[i] + gx) * dt) / (1.0 + a)
         vyi = (vy[i] * (1.0 - a) + (sy / mass[i] + gy) * dt) / (1.0 + a)

@@ -9,6 +9,15 @@ Tables (pandas DataFrames, long format, saved as Parquet):
 - ``particles``: step, time, id, x, y, theta, vx, vy, omega, radius (at snapshots)
 - ``contacts``: step, time, i, j, wall, px, py, nx, ny, fn, fs, sliding, overlap
   (at snapshots; j = -1 and wall = name for disc-wall contacts; n from i to j/the wall)
+
+Saturated scenes (thesis §3.4) add, at every recorded fluid solve:
+
+- ``fluid_forces``: step, time, id, fx, fy, moment, vx, vy, omega — the force and moment of the
+  fluid on each disc (BEM, without buoyancy) [force], [force·length], and the disc velocity the
+  solve prescribed (v_{i−1/2} at step i: the half-step lag of thesis §3.4)
+- ``fluid_walls``: step, time, wall, fx, fy — the force of the fluid on each boundary wall
+- ``pore_pressure``: step, time, wall, x, y, s, p — pressure at the BEM nodes along each wall
+  (s: distance from the wall's first corner) [force/length²]
 """
 from __future__ import annotations
 
@@ -22,6 +31,10 @@ import numpy as np
 import pandas as pd
 
 TABLES = ("wall_forces", "tracked", "energy", "particles", "contacts")
+FLUID_TABLES = ("fluid_forces", "fluid_walls", "pore_pressure")
+_FLUID_COLUMNS = dict(fluid_forces=["step", "time", "id", "fx", "fy", "moment", "vx", "vy", "omega"],
+                      fluid_walls=["step", "time", "wall", "fx", "fy"],
+                      pore_pressure=["step", "time", "wall", "x", "y", "s", "p"])
 
 
 def _atomic_write(path: Path, write):
@@ -48,6 +61,9 @@ class Results:
     contacts: pd.DataFrame
     meta: dict = field(default_factory=dict)
     walls: dict = field(default_factory=dict)  # wall name -> geometry at each snapshot
+    fluid_forces: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=_FLUID_COLUMNS["fluid_forces"]))
+    fluid_walls: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=_FLUID_COLUMNS["fluid_walls"]))
+    pore_pressure: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=_FLUID_COLUMNS["pore_pressure"]))
 
     @classmethod
     def from_simulation(cls, sim) -> "Results":
@@ -78,6 +94,23 @@ class Results:
         cat = lambda xs, cols: pd.concat(xs, ignore_index=True) if xs else pd.DataFrame(columns=cols)
         meta = dict(engine="demflow", scene=sim.scene.name, dt=dt, dt_crit=sim.dt_crit, steps=sim.step,
                     n_discs=sim.n, walls=sim.wall_names, rebuilds=sim.rebuilds)
+        fluid = {}
+        if sim.fluid is not None:
+            fc = sim.fluid
+            ff, fw, pp = [], [], []
+            for step, out, wfl, vel in fc.records:
+                ff.append(pd.DataFrame(dict(step=step, time=step * dt, id=np.arange(sim.n), fx=out[:, 0],
+                                            fy=out[:, 1], moment=out[:, 2], vx=vel[:, 0], vy=vel[:, 1],
+                                            omega=vel[:, 2])))
+                fw.append(pd.DataFrame(dict(step=step, time=step * dt, wall=fc.names, fx=wfl[:, 0], fy=wfl[:, 1])))
+            for step, name, x, y, s_, p in fc.pressure:
+                pp.append(pd.DataFrame(dict(step=step, time=step * dt, wall=name, x=x, y=y, s=s_, p=p)))
+            fluid = dict(fluid_forces=cat(ff, _FLUID_COLUMNS["fluid_forces"]),
+                         fluid_walls=cat(fw, _FLUID_COLUMNS["fluid_walls"]),
+                         pore_pressure=cat(pp, _FLUID_COLUMNS["pore_pressure"]))
+            ks = [int(k) for _, k in fc.strides] or [0]
+            meta.update(fluid_solves=fc.solves, bem_seconds=fc.bem_s, dem_seconds=sim.dem_s,
+                        fluid_stride_min=min(ks), fluid_stride_max=max(ks))
         return cls(
             wall_forces=cat(wf, ["step", "time", "wall", "fx", "fy", "moment", "px", "py"]),
             tracked=cat(tr, ["step", "time", "a", "b", "fn", "fs"]),
@@ -87,6 +120,7 @@ class Results:
                                 "sliding", "overlap"]),
             meta=meta,
             walls={"geometry": cat(walls, ["step", "wall", "px", "py", "ex", "ey", "h1", "h2"])},
+            **fluid,
         )
 
     def wall(self, name: str) -> pd.DataFrame:
@@ -104,7 +138,8 @@ class Results:
         """Write every table as Parquet plus meta.json into directory ``out`` (atomically)."""
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
-        for name in TABLES:
+        names = TABLES + tuple(t for t in FLUID_TABLES if len(getattr(self, t)))
+        for name in names:
             df = getattr(self, name)
             _atomic_write(out / f"{name}.parquet", lambda p, df=df: df.to_parquet(p, index=False))
         geo = self.walls.get("geometry")
@@ -117,6 +152,8 @@ class Results:
     def load(cls, out: str | os.PathLike) -> "Results":
         out = Path(out)
         tables = {name: pd.read_parquet(out / f"{name}.parquet") for name in TABLES}
+        tables.update({name: pd.read_parquet(out / f"{name}.parquet") for name in FLUID_TABLES
+                       if (out / f"{name}.parquet").exists()})
         meta = json.loads((out / "meta.json").read_text())
         walls = {}
         if (out / "wall_geometry.parquet").exists():

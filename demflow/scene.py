@@ -184,6 +184,66 @@ class Wall:
     servo: Servo | None = None
 
 
+@dataclass(frozen=True)
+class WallLoad:
+    """An applied load on a wall of a saturated scene (thesis §5.3.2).
+
+    The wall ``wall`` carries the applied force ``force`` F_A [force] along ``direction`` (the
+    unit direction the load acts on the material, e.g. (0, -1) for a top wall).  At each fluid
+    solve the unbalanced part F_A - F_C (F_C the discs' contact reaction against the load) is
+    handed to the fluid as a uniform traction (F_A - F_C)/L along ``direction`` on that wall
+    [force/length]; the wall's tangential velocity stays prescribed.  The wall must be
+    perpendicular to ``direction`` and axis-aligned.
+    """
+
+    wall: str
+    force: float
+    direction: tuple[float, float] = (0.0, -1.0)
+
+
+@dataclass(frozen=True)
+class Fluid:
+    """The pore fluid of a saturated scene (thesis §3.4, NePTune): Stokes flow solved by the BEM
+    (:mod:`demflow.bem`) in the region bounded by the walls with the discs as holes.
+
+    viscosity : μ [mass/(length·time)] (> 0)
+    density : ρ_l [mass/length²] (unit thickness), for the buoyancy −ρ_l A g of eq 4.39
+    boundary : the walls that bound the fluid, in counter-clockwise order around it (default:
+               every wall of the scene in declaration order); consecutive walls' lines meet at
+               the corners of the outer boundary
+    elements_per_disc : BEM elements on each disc (an inscribed regular polygon)
+    element_length : longest element on the walls [length], far from every disc (near a disc the
+                     wall elements are graded down to the disc elements' length); None: the mean
+                     disc radius
+    min_gap : the gap [length] left between shrunk neighbours and against walls so that the fluid
+              is one connected domain (thesis §3.4, §5.3.3: constant gap width, only the discs that
+              need it are shrunk); None: 0.01 × the smallest radius (thesis §5.3.3: 0.05L for r = 5L)
+    stride : k, the largest number of DEM steps between fluid solves (the fluid force is held
+             between solves; an accuracy knob, see :mod:`demflow.coupling`)
+    adaptive : shorten the stride where the drag relaxation time requires it
+               (:func:`demflow.coupling.stable_stride`)
+    safety : fraction of the explicit-drag stability limit 2τ used by the adaptive stride
+    moments : apply the fluid moment on each disc as well as the force
+    loads : applied loads handed to the fluid (:class:`WallLoad`)
+    record_every : record fluid forces and wall pore pressure at every this many-th solve
+    quadrature : BEM quadrature rule (0: thesis Table 4.1, -1: fine, n > 0: n-point Gauss)
+    """
+
+    viscosity: float
+    density: float = 0.0
+    boundary: tuple[str, ...] | None = None
+    elements_per_disc: int = 32
+    element_length: float | None = None
+    min_gap: float | None = None
+    stride: int = 1
+    adaptive: bool = True
+    safety: float = 0.5
+    moments: bool = True
+    loads: tuple[WallLoad, ...] = ()
+    record_every: int = 1
+    quadrature: int = 0
+
+
 @dataclass
 class Discs:
     """Discs as arrays: centres (x, y) [length], radius [length], material names.
@@ -229,6 +289,7 @@ class Scene:
     allow_supercritical : accept a dt above the critical estimate (refused otherwise)
     n_steps : default run length in steps (cycles)
     skin : neighbour-list margin (thesis DNTOL, eq 2.33) [length]; None = 0.2 × mean radius
+    fluid : the pore fluid (:class:`Fluid`) of a saturated scene; None for a dry one
     """
 
     name: str
@@ -247,6 +308,7 @@ class Scene:
     overlap_tolerance: float = 1e-6
     outputs: Outputs = Outputs()
     description: str = ""
+    fluid: Fluid | None = None  # a saturated scene (thesis §3.4); None: dry, nothing fluid is built
 
     def law_for(self, a: str, b: str) -> LinearLaw:
         """The law of a material pair, in either order; a clear error if none is declared."""

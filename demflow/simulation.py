@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -44,10 +45,11 @@ class Simulation:
 
     def __init__(self, *, scene, x, y, r, mass, inertia, v, om, mat, wall_geo, wall_mat, tables,
                  has_shear, dt, dt_crit, C, Cr, skin, gravity, normal_mode, sliding_mode, track,
-                 material_names):
+                 material_names, fluid=None):
         self.scene = scene
         self.dt = dt
         self.dt_crit = dt_crit
+        self.dt_fluid = None  # the fluid drag limit of a saturated scene (set by build)
         self.skin = skin
         self.has_shear = has_shear
         self.normal_mode = normal_mode
@@ -125,6 +127,21 @@ class Simulation:
         self._mat_p = np.zeros(n, np.int64)
         self._records = []
         self._snapshots = []
+        # saturated scenes only (thesis §3.4): the fluid coupling and the external force it feeds
+        self.fluid = None
+        self._has_ext = False
+        self._ext = np.zeros((0, 3))
+        self.dem_s = 0.0
+        if fluid is not None:
+            from .coupling import FluidCoupler
+
+            self.fluid = FluidCoupler(self, fluid)
+            self._has_ext = True
+            self._ext = np.zeros((n, 3))
+            # buoyancy B = -ρ_l A g, A = πR² (thesis eq 4.39)
+            area = np.pi * r * r
+            self._buoyancy = -fluid.rho * area[:, None] * np.array([self.gx, self.gy])[None, :]
+            self._next_solve = 0
         self.rebuild()
 
     # ------------------------------------------------------------------ contacts
@@ -211,8 +228,14 @@ class Simulation:
             stop = min(target, snaps[0] if snaps else target, self.step + self.CHUNK, nxt[0] if nxt else target)
             good = self._copy_state()
             while self.step < stop:
+                n_run = stop - self.step
+                if self.fluid is not None:
+                    if self.step >= self._next_solve:
+                        self._fluid_update()
+                    n_run = min(n_run, self._next_solve - self.step)
+                t_dem = time.perf_counter()
                 done, status, self.disp_walls, rec_count = run_steps(
-                    stop - self.step, self.step, self.skin, self.disp_walls,
+                    n_run, self.step, self.skin, self.disp_walls,
                     self.x, self.y, self.th, self.vx, self.vy, self.om, self.r, self.mass, self.inertia,
                     self.C, self.Cr, self.mat, self.xref, self.yref, self.gx, self.gy,
                     self._perm, self._inv, self._r_p, self._mass_p, self._inertia_p, self._C_p, self._Cr_p,
@@ -228,7 +251,8 @@ class Simulation:
                     self.servo_G, self.servo_vmax,
                     *self._law_args(),
                     every, rec_count, rec_step, rec_wall, rec_wallpos, self.track_a, self.track_b,
-                    rec_track, rec_energy)
+                    rec_track, rec_energy, self._ext, self._has_ext)
+                self.dem_s += time.perf_counter() - t_dem
                 self.step += done
                 if status == BLOWUP:
                     self._store_records(rec_count, rec_step, rec_wall, rec_wallpos, rec_track, rec_energy)
@@ -256,6 +280,20 @@ class Simulation:
         for w, wall in enumerate(self.scene.walls):
             if wall.servo is not None:
                 self.servo_F[w] = wall.servo.force_at(self.step)
+
+    def _fluid_update(self):
+        """Solve the fluid at the current state (positions x_i, velocities v_{i-1/2}: the half-step
+        lag of thesis §3.4) and hold its force, moment and the buoyancy (eq 4.39) for the next
+        stride (see :mod:`demflow.coupling`)."""
+        f = self.fluid
+        out = f.solve(self)
+        if not f.setup.moments:
+            out[:, 2] = 0.0
+        out[:, :2] += self._buoyancy
+        self._ext[:] = out
+        k = f.stable_stride(self)
+        f.strides.append((self.step, k))
+        self._next_solve = self.step + k
 
     def _store_records(self, q, rec_step, rec_wall, rec_wallpos, rec_track, rec_energy):
         if q:
@@ -318,6 +356,8 @@ class Simulation:
         for k in _STATE:
             setattr(self, k, s[k].copy())
         self.step = s["step"]
+        if self.fluid is not None:
+            self._next_solve = self.step
         self.rebuild()
 
     def _save_last_good(self):
@@ -351,5 +391,7 @@ class Simulation:
             for k in _STATE:
                 setattr(self, k, z[k].copy())
             self.step = int(meta["step"])
+        if self.fluid is not None:
+            self._next_solve = self.step
         self.rebuild()
         return self

@@ -102,7 +102,9 @@ def run_steps(n, step0, skin, disp_walls,
               # law
               kn, ks, cn, cs, mu, coh, dt, normal_mode, sliding_mode, has_shear,
               # records
-              every, rec_count, rec_step, rec_wall, rec_wallpos, track_a, track_b, rec_track, rec_energy):
+              every, rec_count, rec_step, rec_wall, rec_wallpos, track_a, track_b, rec_track, rec_energy,
+              # external force per disc (fluid, thesis §3.4)
+              ext, has_ext):
     """Run up to n steps from step ``step0``.
 
     Returns (steps done, status, disp_walls, rec_count): status DONE, REBUILD (the
@@ -116,6 +118,9 @@ def run_steps(n, step0, skin, disp_walls,
     x, y, th, vx, vy, om and hist are the public ones, in disc and key order, between
     calls (as are Fx, Fy, M: each disc's contact force and moment sums of the last step
     applied).  Every sum is taken in the order of the disc-order reference.
+    With ``has_ext`` the (n, 3) array ``ext`` (disc order: fx, fy, moment) is added to every
+    disc's force sums at every step (the fluid force of a saturated scene, held between fluid
+    solves); a dry scene passes has_ext=False and the cycle is unchanged.
     """
     nd = x.shape[0]
     m = finder.shape[0]
@@ -148,7 +153,8 @@ def run_steps(n, step0, skin, disp_walls,
         phase_start, phase_end, phase_vx, phase_vy, phase_om, phase_cx, phase_cy, phase_about_p,
         servo_on, servo_start, servo_F, servo_dx, servo_dy, servo_G, servo_vmax,
         kn, ks, cn, cs, mu, coh, dt, normal_mode, sliding_mode, has_shear,
-        every, rec_count, rec_step, rec_wall, rec_wallpos, track_a, track_b, rec_track, rec_energy)
+        every, rec_count, rec_step, rec_wall, rec_wallpos, track_a, track_b, rec_track, rec_energy,
+        ext, perm, has_ext)
     for p in range(nd):
         i = perm[p]
         x[i] = x_p[p]
@@ -175,7 +181,8 @@ def _cycle(n, step0, skin, disp_walls, inv, mat, x, y, th, vx, vy, om, r, mass, 
            phase_start, phase_end, phase_vx, phase_vy, phase_om, phase_cx, phase_cy, phase_about_p,
            servo_on, servo_start, servo_F, servo_dx, servo_dy, servo_G, servo_vmax,
            kn, ks, cn, cs, mu, coh, dt, normal_mode, sliding_mode, has_shear,
-           every, rec_count, rec_step, rec_wall, rec_wallpos, track_a, track_b, rec_track, rec_energy):
+           every, rec_count, rec_step, rec_wall, rec_wallpos, track_a, track_b, rec_track, rec_energy,
+           ext, perm, has_ext):
     """The steps of :func:`run_steps` on the slot-ordered state (disc arrays and hist
     internal; finder, other, mat public, mapped through inv and pos where records need
     them)."""
@@ -219,7 +226,7 @@ def _cycle(n, step0, skin, disp_walls, inv, mat, x, y, th, vx, vy, om, r, mass, 
                             phase_cx, phase_cy, phase_about_p,
                             servo_on, servo_start, servo_F, servo_dx, servo_dy, servo_G, servo_vmax)
         dmax2, jump2 = sum_and_integrate(start, sidx, f, r, x, y, th, vx, vy, om, mass, inertia, C, Cr,
-                                         gx, gy, dt, xref, yref, P, Fx, Fy, M)
+                                         gx, gy, dt, xref, yref, P, Fx, Fy, M, ext, perm, has_ext)
         if jump2 > MAX_STEP_RATIO * MAX_STEP_RATIO or not np.isfinite(jump2):
             return s + 1, BLOWUP, disp_walls, rec_count
         disp_walls += move_walls(wpx, wpy, wex, wey, wh1, wh2, wvx, wvy, wom, wcx, wcy, dt)

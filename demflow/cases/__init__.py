@@ -12,9 +12,11 @@ from .cs_nine_disc import NineDisc
 from .cs_nine_disc_engines import NineDiscEngines
 from .cs_photoelastic import Photoelastic
 from .thesis_bem import CylinderMovingPlanes, CylinderPoiseuille, FreeRectangle
+from .thesis_falling_disc import FallingDisc
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
+CASES[FallingDisc.name] = FallingDisc()
 
 
 def get_case(name: str) -> Case:
