@@ -37,10 +37,9 @@ against which each engine's value is judged.
 """
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from ..analysis import forces as fstat
 from ..analysis.micro import coordination_number, fabric_tensor
@@ -180,8 +179,6 @@ def stage_statistics(res, step, n_discs) -> dict:
 
 def prediction_band(values, level=0.95):
     """95 % prediction interval for one more seed: mean ± t·s·√(1 + 1/n) (scipy.stats.t)."""
-    from scipy import stats
-
     v = np.asarray(values, float)
     n = len(v)
     h = stats.t.ppf(0.5 + level / 2, n - 1) * v.std(ddof=1) * np.sqrt(1 + 1 / n)
@@ -241,6 +238,8 @@ class Photoelastic(Case):
         out["servo_stats"] = {st: stage_statistics(res, s, len(pk.x))
                               for st, s in (("A", p["servo_cycles"]), ("B", 2 * p["servo_cycles"]))}
         out["engines"] = self._engines(p, pk)
+        out["engine_stats"] = {e: {st: stage_statistics(res, s, len(pk.x)) for st, s in (("A", a), ("B", b))}
+                               for e, res in out["engines"].items()}
         return out
 
     # -- engines
@@ -297,12 +296,8 @@ class Photoelastic(Case):
         # engines vs demflow, judged against the seed band
         bands = seed_bands(results)
         ref = results["seeds"][p["seed"]]
-        for e, res in results["engines"].items():
-            a, b = stage_steps(p)
-            for stage, step in (("A", a), ("B", b)):
-                st = stage_statistics(res, step, len(results["packings"][p["seed"]].x))
-                from scipy import stats
-
+        for e, per_stage in results["engine_stats"].items():
+            for stage, st in per_stage.items():
                 ks = stats.ks_2samp(ref[stage]["f"], st["f"])
                 out.append(Check.condition(f"{e} vs demflow, stage {stage}: two-sample KS on f = F/<F> does not reject "
                                            f"at 5 % (p = {ks.pvalue:.3g})", ks.pvalue >= 0.05, ks.pvalue, src,
@@ -367,9 +362,6 @@ def seed_bands(results) -> dict:
 
 def statistics_table(results, p, stage) -> pd.DataFrame:
     bands = seed_bands(results)
-    a, b = stage_steps(p)
-    step = a if stage == "A" else b
-    n = len(results["packings"][p["seed"]].x)
     cols = {}
     vals = {k: [s[stage][k] for s in results["seeds"].values()] for k in STATS}
     cols["demflow mean over seeds"] = {k: np.mean(v) for k, v in vals.items()}
@@ -377,19 +369,15 @@ def statistics_table(results, p, stage) -> pd.DataFrame:
     cols["band low"] = {k: bands[stage][k][0] for k in STATS}
     cols["band high"] = {k: bands[stage][k][1] for k in STATS}
     cols[f"demflow seed {p['seed']}"] = {k: results["seeds"][p["seed"]][stage][k] for k in STATS}
-    for e, res in results["engines"].items():
-        st = stage_statistics(res, step, n)
-        cols[e] = {k: st[k] for k in STATS}
+    for e, per_stage in results["engine_stats"].items():
+        cols[e] = {k: per_stage[stage][k] for k in STATS}
     return pd.DataFrame(cols).loc[list(STATS)]
 
 
 def wall_forces_table(results, p, stage) -> pd.DataFrame:
-    a, b = stage_steps(p)
-    step = a if stage == "A" else b
-    n = len(results["packings"][p["seed"]].x)
     frames = {"demflow": results["seeds"][p["seed"]][stage]["walls"]}
-    for e, res in results["engines"].items():
-        frames[e] = stage_statistics(res, step, n)["walls"]
+    for e, per_stage in results["engine_stats"].items():
+        frames[e] = per_stage[stage]["walls"]
     frames["demflow servo"] = results["servo_stats"][stage]["walls"]
     return pd.concat(frames, names=["engine"])[["cs_wall", "F1", "F2", "e_rel", "contacts"]]
 

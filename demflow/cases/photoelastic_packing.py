@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene, Servo, Wall
+from ..scene import Discs, LinearLaw, Material, Outputs, Phase, Scene, Servo, Wall
 
 SIZES = ((40.0, 6), (35.0, 7), (30.0, 16), (25.0, 33), (20.0, 33), (18.0, 36), (15.0, 28), (10.0, 38))
 DENSITY = 2000.0
