@@ -28,7 +28,7 @@ kΔt < τ).  K is the disc's self-resistance: measured by BEM unit-velocity solv
 (:meth:`FluidCoupler.self_resistance`) and updated as the disc nears a wall with the exact
 one-wall resistance 4πμ/(α − tanh α), cosh α = d/R (long-ranged in 2D: a disc 2R from a wall
 already feels several times its open-fluid drag), and near a neighbour with the lubrication
-resistance; its spin likewise needs kΔt < 2I/K_rot (for a disc in an unbounded fluid
+resistance (a neighbour is treated like a wall at the same gap); its spin likewise needs kΔt < 2I/K_rot (for a disc in an unbounded fluid
 K_rot = 4πμR², so I/K_rot = m/8πμ, shorter than m/K: rotation is the binding limit of a free
 disc).  The lubrication resistance of two discs at gap h is K_lub = 3√2π μ (R_e/h)^{3/2},
 R_e = R_iR_j/(R_i+R_j).  :meth:`FluidCoupler.stable_stride` gives the number of DEM steps between
@@ -288,7 +288,8 @@ class FluidCoupler:
         translational self-resistance (force on disc i for unit velocity of disc i, everything else
         at rest) and K_rot [force·length·time] its rotational self-resistance (moment for unit ω),
         by BEM solves in the current shrunk configuration (three per disc)."""
-        dom, rp, _, _ = self.domain(sim)
+        dom, rp, _, d = self.domain(sim)
+        self.h0_pairs = np.maximum(d - (rp[:, None] + rp[None, :]), self.setup.gap)
         self.d0_walls = np.maximum(side_distances(sim.x, sim.y, self.last_corners), rp[:, None] + self.setup.gap)
         K = np.zeros(sim.n)
         Kr = np.zeros(sim.n)
@@ -314,10 +315,12 @@ class FluidCoupler:
         return tau
 
     def resistance_estimate(self, sim):
-        """Current self-resistance per disc: the measured K0 (first solve) plus, for each wall, the
-        growth of the exact one-wall resistance (:func:`wall_resistance`) since then, plus the
-        lubrication resistance of every disc-disc gap (BEM geometry) narrower than the smaller
-        radius (conservative: gaps of the first configuration are counted twice)."""
+        """Current self-resistance per disc: the measured K0 (first solve) plus the growth since then
+        of the exact one-wall resistance (:func:`wall_resistance`) for each wall and for each other
+        disc, treated as a wall at the current gap (BEM geometry).  For a neighbour this is
+        conservative: at small gaps it is √2 × the squeeze resistance of two equal discs, and it
+        reaches the long range of 2D Stokes interactions (discs passing each other 1-2 radii
+        apart oscillated at a stride the near-contact lubrication term alone allowed)."""
         st = self.setup
         if self.K0 is None:
             self.K0, self.K0rot = self.self_resistance(sim)
@@ -326,13 +329,12 @@ class FluidCoupler:
         dw = np.maximum(side_distances(sim.x, sim.y, self.last_corners), rp[:, None] + st.gap)
         grow = wall_resistance(st.mu, rp[:, None], dw) - wall_resistance(st.mu, rp[:, None], self.d0_walls)
         K += np.sum(np.maximum(grow, 0.0), axis=1)
-        n = sim.n
-        if n > 1:
-            h = d - (rp[:, None] + rp[None, :])
-            ii, jj = np.nonzero(h < np.minimum(rp[:, None], rp[None, :]))
-            for a, b in zip(ii, jj):
-                re = rp[a] * rp[b] / (rp[a] + rp[b])
-                K[a] += lubrication_resistance(st.mu, re, max(h[a, b], st.gap))
+        if sim.n > 1:
+            h = np.maximum(d - (rp[:, None] + rp[None, :]), st.gap)
+            grow = wall_resistance(st.mu, rp[:, None], rp[:, None] + h) - \
+                wall_resistance(st.mu, rp[:, None], rp[:, None] + self.h0_pairs)
+            np.fill_diagonal(grow, 0.0)
+            K += np.sum(np.maximum(grow, 0.0), axis=1)
         return K
 
     def time_step_bound(self, sim):
