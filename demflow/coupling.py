@@ -24,13 +24,16 @@ Before each fluid solve (every ``stride`` DEM steps at most):
 Time step (thesis §5.2 found it "by trial and error").  Under a lagged explicit drag F = −K v a
 disc's velocity obeys v ← v + kΔt(W − K v)/m between solves, which is stable only for
 kΔt < 2τ with τ = m/K the relaxation time of its velocity under its drag (and monotone for
-kΔt < τ); its spin likewise needs kΔt < 2I/K_rot (for a disc in an unbounded fluid
+kΔt < τ).  K is the disc's self-resistance: measured by BEM unit-velocity solves at the start
+(:meth:`FluidCoupler.self_resistance`) and updated as the disc nears a wall with the exact
+one-wall resistance 4πμ/(α − tanh α), cosh α = d/R (long-ranged in 2D: a disc 2R from a wall
+already feels several times its open-fluid drag), and near a neighbour with the lubrication
+resistance (a neighbour is treated like a wall at the same gap); its spin likewise needs kΔt < 2I/K_rot (for a disc in an unbounded fluid
 K_rot = 4πμR², so I/K_rot = m/8πμ, shorter than m/K: rotation is the binding limit of a free
-disc).  K is the disc's self-resistance: measured by BEM unit-velocity solves
-(:func:`self_resistance`), and growing near a wall or a neighbour at gap h like the 2D
-lubrication resistance K_lub = 3√2π μ (R_e/h)^{3/2} (R_e = R_iR_j/(R_i+R_j), R_i for a wall).
-:func:`stable_stride` gives the number of DEM steps between solves that keeps kΔt <= safety·2τ;
-:func:`fluid_time_step` the bound a scene's Δt must meet at the smallest gap.
+disc).  The lubrication resistance of two discs at gap h is K_lub = 3√2π μ (R_e/h)^{3/2},
+R_e = R_iR_j/(R_i+R_j).  :meth:`FluidCoupler.stable_stride` gives the number of DEM steps between
+solves that keeps kΔt <= safety·2τ; :meth:`FluidCoupler.time_step_bound` the bound a scene's Δt
+must meet (a wall at the minimum gap), which build() enforces.
 
 Units: the scene's consistent units; forces and moments per unit thickness.
 """
@@ -52,6 +55,21 @@ def lubrication_resistance(mu, r_eff, gap):
     """Squeeze-film resistance of two cylinders (or a cylinder and a plane, r_eff = R) at gap h,
     3√2π μ (R_e/h)^{3/2} [force/(length/time) per unit thickness] (leading order in h/R_e)."""
     return LUBRICATION * mu * (r_eff / gap) ** 1.5
+
+
+def wall_resistance(mu, r, d):
+    """Resistance of a cylinder of radius R translating towards a plane wall at centre distance d,
+    4πμ/(α − tanh α) with cosh α = d/R (2D Stokes, exact for one wall; Jeffrey & Onishi 1981)
+    [force/(length/time) per unit thickness].  Long-ranged (~4πμ/(ln(2d/R) − 1) far away) and
+    3√2π μ (R/h)^{3/2} at a small gap h = d − R."""
+    a = np.arccosh(np.maximum(np.asarray(d, dtype=float) / r, 1.0 + 1e-12))
+    return 4.0 * math.pi * mu / (a - np.tanh(a))
+
+
+def side_distances(x, y, corners):
+    """(n, m) distance from each disc centre to each side of the outer polygon."""
+    m = len(corners)
+    return np.column_stack([_segment_distance(x, y, corners[k], corners[(k + 1) % m]) for k in range(m)])
 
 
 @dataclass
@@ -166,7 +184,7 @@ class FluidCoupler:
         self.bem_s = 0.0
         self.K0 = None  # self-resistance of each disc, initial configuration (time step, adaptive stride)
         self.K0rot = None
-        self.records = []  # (step, forces (n, 3), wall fluid force (nb, 2), disc velocities seen (n, 3))
+        self.records = []  # (step, forces (n, 3), wall fluid force (nb, 2), disc velocities seen and positions (n, 5))
         self.strides = []  # (step, DEM steps to the next solve)
         self.pressure = []  # (step, wall name, x, y, s, p)
         self.last_r = None
@@ -179,6 +197,7 @@ class FluidCoupler:
         p, e = wall_lines(sim, st)
         corners = outer_corners(p, e)
         rp, gw, dist = shrunk_radii(sim.x, sim.y, sim.r, corners, st.gap)
+        self.last_corners = corners
         h_disc = 2 * math.pi * float(rp.max()) / st.n_disc if sim.n else st.element_length
         xs, ys = sim.x, sim.y
 
@@ -261,7 +280,7 @@ class FluidCoupler:
             a = dom.a[e[0]]
             s = np.hypot(xy[:, 0] - a[0], xy[:, 1] - a[1])
             self.pressure.append((sim.step, name, xy[:, 0].copy(), xy[:, 1].copy(), s, p[nodes].copy()))
-        self.records.append((sim.step, out.copy(), wf, np.column_stack([sim.vx, sim.vy, sim.om])))
+        self.records.append((sim.step, out.copy(), wf, np.column_stack([sim.vx, sim.vy, sim.om, sim.x, sim.y])))
 
     # ------------------------------------------------------------------ time step
     def self_resistance(self, sim):
@@ -269,7 +288,9 @@ class FluidCoupler:
         translational self-resistance (force on disc i for unit velocity of disc i, everything else
         at rest) and K_rot [force·length·time] its rotational self-resistance (moment for unit ω),
         by BEM solves in the current shrunk configuration (three per disc)."""
-        dom, _, _, _ = self.domain(sim)
+        dom, rp, _, d = self.domain(sim)
+        self.h0_pairs = np.maximum(d - (rp[:, None] + rp[None, :]), self.setup.gap)
+        self.d0_walls = np.maximum(side_distances(sim.x, sim.y, self.last_corners), rp[:, None] + self.setup.gap)
         K = np.zeros(sim.n)
         Kr = np.zeros(sim.n)
         for i in range(sim.n):
@@ -294,38 +315,40 @@ class FluidCoupler:
         return tau
 
     def resistance_estimate(self, sim):
-        """Current self-resistance per disc: the measured K0 (first solve) plus the lubrication
-        resistance of every gap (BEM geometry) narrower than the disc's radius (conservative: the
-        gaps of the first configuration are counted twice)."""
+        """Current self-resistance per disc: the measured K0 (first solve) plus the growth since then
+        of the exact one-wall resistance (:func:`wall_resistance`) for each wall and for each other
+        disc, treated as a wall at the current gap (BEM geometry).  For a neighbour this is
+        conservative: at small gaps it is √2 × the squeeze resistance of two equal discs, and it
+        reaches the long range of 2D Stokes interactions (discs passing each other 1-2 radii
+        apart oscillated at a stride the near-contact lubrication term alone allowed)."""
         st = self.setup
         if self.K0 is None:
             self.K0, self.K0rot = self.self_resistance(sim)
         K = self.K0.copy()
         rp, gw, d = self.last_r, self.last_gw, self.last_dist
-        for i in range(sim.n):
-            if gw[i] < rp[i]:
-                K[i] += lubrication_resistance(st.mu, rp[i], max(gw[i], st.gap))
-        n = sim.n
-        if n > 1:
-            h = d - (rp[:, None] + rp[None, :])
-            ii, jj = np.nonzero(h < np.minimum(rp[:, None], rp[None, :]))
-            for a, b in zip(ii, jj):
-                re = rp[a] * rp[b] / (rp[a] + rp[b])
-                K[a] += lubrication_resistance(st.mu, re, max(h[a, b], st.gap))
+        dw = np.maximum(side_distances(sim.x, sim.y, self.last_corners), rp[:, None] + st.gap)
+        grow = wall_resistance(st.mu, rp[:, None], dw) - wall_resistance(st.mu, rp[:, None], self.d0_walls)
+        K += np.sum(np.maximum(grow, 0.0), axis=1)
+        if sim.n > 1:
+            h = np.maximum(d - (rp[:, None] + rp[None, :]), st.gap)
+            grow = wall_resistance(st.mu, rp[:, None], rp[:, None] + h) - \
+                wall_resistance(st.mu, rp[:, None], rp[:, None] + self.h0_pairs)
+            np.fill_diagonal(grow, 0.0)
+            K += np.sum(np.maximum(grow, 0.0), axis=1)
         return K
 
     def time_step_bound(self, sim):
         """The largest DEM Δt [time] the lagged explicit drag tolerates anywhere in the run:
-        safety × 2 min_i τ_i with τ_i = min(m_i / (K0_i + K_lub(R_i, g)), I_i / K0rot_i), K0 the
-        measured self-resistance of the initial configuration and K_lub the lubrication resistance
-        of a wall at the minimum gap g (the closest a disc's BEM boundary can come to a wall, see
+        safety × 2 min_i τ_i with τ_i = min(m_i / (K0_i + K_w(R_i + g)), I_i / K0rot_i), K0 the
+        measured self-resistance of the initial configuration and K_w the resistance
+        (:func:`wall_resistance`) of a wall at the minimum gap g (the closest a disc's BEM boundary can come to a wall, see
         the module docstring)."""
         st = self.setup
         if sim.n == 0:
             return math.inf
         if self.K0 is None:
             self.K0, self.K0rot = self.self_resistance(sim)
-        Kw = self.K0 + lubrication_resistance(st.mu, sim.r, st.gap)
+        Kw = self.K0 + wall_resistance(st.mu, sim.r, sim.r + st.gap)
         return st.safety * 2.0 * float(np.min(self._taus(sim, Kw)))
 
     def stable_stride(self, sim):

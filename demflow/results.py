@@ -14,7 +14,7 @@ Saturated scenes (thesis §3.4) add, at every recorded fluid solve:
 
 - ``fluid_forces``: step, time, id, fx, fy, moment, vx, vy, omega — the force and moment of the
   fluid on each disc (BEM, without buoyancy) [force], [force·length], and the disc velocity the
-  solve prescribed (v_{i−1/2} at step i: the half-step lag of thesis §3.4)
+  solve prescribed (v_{i−1/2} at step i: the half-step lag of thesis §3.4) and its position x, y
 - ``fluid_walls``: step, time, wall, fx, fy — the force of the fluid on each boundary wall
 - ``pore_pressure``: step, time, wall, x, y, s, p — pressure at the BEM nodes along each wall
   (s: distance from the wall's first corner) [force/length²]
@@ -32,7 +32,7 @@ import pandas as pd
 
 TABLES = ("wall_forces", "tracked", "energy", "particles", "contacts")
 FLUID_TABLES = ("fluid_forces", "fluid_walls", "pore_pressure")
-_FLUID_COLUMNS = dict(fluid_forces=["step", "time", "id", "fx", "fy", "moment", "vx", "vy", "omega"],
+_FLUID_COLUMNS = dict(fluid_forces=["step", "time", "id", "fx", "fy", "moment", "vx", "vy", "omega", "x", "y"],
                       fluid_walls=["step", "time", "wall", "fx", "fy"],
                       pore_pressure=["step", "time", "wall", "x", "y", "s", "p"])
 
@@ -101,7 +101,7 @@ class Results:
             for step, out, wfl, vel in fc.records:
                 ff.append(pd.DataFrame(dict(step=step, time=step * dt, id=np.arange(sim.n), fx=out[:, 0],
                                             fy=out[:, 1], moment=out[:, 2], vx=vel[:, 0], vy=vel[:, 1],
-                                            omega=vel[:, 2])))
+                                            omega=vel[:, 2], x=vel[:, 3], y=vel[:, 4])))
                 fw.append(pd.DataFrame(dict(step=step, time=step * dt, wall=fc.names, fx=wfl[:, 0], fy=wfl[:, 1])))
             for step, name, x, y, s_, p in fc.pressure:
                 pp.append(pd.DataFrame(dict(step=step, time=step * dt, wall=name, x=x, y=y, s=s_, p=p)))

@@ -18,7 +18,7 @@ def test_falling_disc_reduced_meets_terminal_and_history_checks():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["thesis-falling-disc"])
+@pytest.mark.parametrize("name", ["thesis-falling-disc", "thesis-sedimentation"])
 def test_saturated_case_passes_every_check(name, tmp_path):
     case = CASES[name]
     p = case.merged({})
@@ -26,3 +26,4 @@ def test_saturated_case_passes_every_check(name, tmp_path):
     failed = [c.name for c in case.checks(res, p) if not c.passed]
     assert not failed
     assert case.figures(res, p, str(tmp_path))
+

@@ -13,10 +13,12 @@ from .cs_nine_disc_engines import NineDiscEngines
 from .cs_photoelastic import Photoelastic
 from .thesis_bem import CylinderMovingPlanes, CylinderPoiseuille, FreeRectangle
 from .thesis_falling_disc import FallingDisc
+from .thesis_sedimentation import Sedimentation
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
 CASES[FallingDisc.name] = FallingDisc()
+CASES[Sedimentation.name] = Sedimentation()
 
 
 def get_case(name: str) -> Case:
