@@ -121,6 +121,7 @@ def _check_fluid(scene: Scene, x, y, r, wall_geo):
     n_disc = whole("elements_per_disc", f.elements_per_disc, 8)
     stride = whole("stride", f.stride, 1)
     rec = whole("record_every", f.record_every, 1)
+    start = whole("start", f.start, 0)
     if not (0 < f.safety <= 1):
         raise SceneError(f"fluid safety={f.safety}; give a fraction in (0, 1] of the drag stability limit 2τ")
     n = r.shape[0]
@@ -176,7 +177,7 @@ def _check_fluid(scene: Scene, x, y, r, wall_geo):
                       stride=stride, adaptive=bool(f.adaptive), safety=float(f.safety), moments=bool(f.moments),
                       load_wall=np.array(lw, dtype=np.int64), load_force=np.array(lf, dtype=float),
                       load_dir=np.array(ld, dtype=float).reshape(-1, 2), record_every=rec,
-                      quadrature=int(f.quadrature))
+                      quadrature=int(f.quadrature), start=start)
 
 
 def build(scene: Scene):

@@ -55,6 +55,7 @@ def main(argv=None):
     v = sub.add_parser("validate", help="run every validation case and write the report")
     v.add_argument("--out", default="reports/validation")
     v.add_argument("--case", action="append", help="only these cases")
+    v.add_argument("--all", action="store_true", help="include the slow cases (minutes of BEM each)")
     rf = sub.add_parser("reference", help="run a real engine and store its reference run (reference_runs/)")
     rf.add_argument("case", choices=["cs-nine-disc", "cs-photoelastic"])
     rf.add_argument("--engine", required=True, choices=["yade", "liggghts"])
@@ -138,7 +139,7 @@ def main(argv=None):
         except KeyError as e:
             print(f"demflow: {e.args[0]}", file=sys.stderr)
             return 2
-        summary = run_validation(names, args.out)
+        summary = run_validation(names, args.out, include_slow=args.all)
         for name, c in summary["cases"].items():
             n_ok = sum(ch["passed"] for ch in c["checks"])
             print(f"{'PASS' if c['passed'] else 'FAIL'}  {name:24s} {n_ok}/{len(c['checks'])} checks  {c['wall_time_s']} s")

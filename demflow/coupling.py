@@ -91,6 +91,7 @@ class FluidSetup:
     load_dir: np.ndarray  # (nl, 2)
     record_every: int
     quadrature: int
+    start: int = 0  # first step with the fluid present (thesis §5.3.3, §5.5.4: liquid added after a dry stage)
 
 
 def wall_lines(sim, setup):

@@ -227,6 +227,8 @@ class Fluid:
     loads : applied loads handed to the fluid (:class:`WallLoad`)
     record_every : record fluid forces and wall pore pressure at every this many-th solve
     quadrature : BEM quadrature rule (0: thesis Table 4.1, -1: fine, n > 0: n-point Gauss)
+    start : the step at which the liquid is added (thesis §5.3.3, §5.5.4: a dry compression, then
+            the pores are filled); before it the scene runs dry, with no fluid solve
     """
 
     viscosity: float
@@ -242,6 +244,7 @@ class Fluid:
     loads: tuple[WallLoad, ...] = ()
     record_every: int = 1
     quadrature: int = 0
+    start: int = 0
 
 
 @dataclass

@@ -141,7 +141,7 @@ class Simulation:
             # buoyancy B = -ρ_l A g, A = πR² (thesis eq 4.39)
             area = np.pi * r * r
             self._buoyancy = -fluid.rho * area[:, None] * np.array([self.gx, self.gy])[None, :]
-            self._next_solve = 0
+            self._next_solve = self.fluid.setup.start
         self.rebuild()
 
     # ------------------------------------------------------------------ contacts
@@ -357,7 +357,7 @@ class Simulation:
             setattr(self, k, s[k].copy())
         self.step = s["step"]
         if self.fluid is not None:
-            self._next_solve = self.step
+            self._next_solve = max(self.step, self.fluid.setup.start)
         self.rebuild()
 
     def _save_last_good(self):
@@ -379,6 +379,31 @@ class Simulation:
         os.replace(tmp, path)
         return path
 
+    def continue_from(self, other: "Simulation") -> "Simulation":
+        """Take over ``other``'s dynamic state as this scene's step 0: disc positions, rotations and
+        velocities, wall positions and velocities, and every contact with its history (keyed by
+        pair).  A protocol in stages whose laws or loading differ (a frictionless compression, then
+        frictional shear; a dry stage, then a saturated one) keeps its contact forces across the
+        change.  The scenes must have the same discs (radii) and the same number of walls."""
+        if other.n != self.n or other.nw != self.nw or not np.array_equal(other.r, self.r):
+            raise ValueError(
+                f"continue_from: scene {other.scene.name!r} has {other.n} discs and {other.nw} walls, "
+                f"{self.scene.name!r} has {self.n} and {self.nw} (or the radii differ); a staged protocol "
+                "needs the same discs and walls in every stage")
+        for k in _STATE:
+            if k == "hist":
+                continue
+            setattr(self, k, getattr(other, k).copy())
+        h = np.zeros((other.hist.shape[0], self.n_hist))
+        c = min(self.n_hist, other.hist.shape[1])
+        h[:, :c] = other.hist[:, :c]  # a stage without shear springs keeps only the normal column
+        self.hist = h
+        self.step = 0
+        if self.fluid is not None:
+            self._next_solve = self.fluid.setup.start
+        self.rebuild()
+        return self
+
     def load_checkpoint(self, path: str | os.PathLike) -> "Simulation":
         """Restore a state written by :meth:`save_checkpoint` for the same scene."""
         with np.load(path) as z:
@@ -392,6 +417,6 @@ class Simulation:
                 setattr(self, k, z[k].copy())
             self.step = int(meta["step"])
         if self.fluid is not None:
-            self._next_solve = self.step
+            self._next_solve = max(self.step, self.fluid.setup.start)
         self.rebuild()
         return self

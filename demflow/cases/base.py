@@ -54,6 +54,9 @@ class Case:
     source: str = ""
     assumptions: tuple[str, ...] = ()
     params: dict[str, Any] = {}
+    # a slow case (minutes of BEM) is left out of a plain `demflow validate`; run it by name
+    # (`demflow validate --case NAME`) or with `--all`; its last result stays on the report
+    slow: bool = False
 
     def merged(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         p = dict(self.params)

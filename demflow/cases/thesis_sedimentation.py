@@ -42,6 +42,7 @@ class Sedimentation(Case):
     name = "thesis-sedimentation"
     title = "Sedimentation of three discs in a container (thesis §5.2)"
     source = SRC
+    slow = True  # 903 s on the 2-core machine (BEM 855 s): not in a plain `demflow validate`
     assumptions = (
         "Particle density ρs = 2 g/cm² inferred from the text's ~20 cm/s and Re ≈ 0.4 (the stated ρs = ρl "
         "cannot sediment): a run with ρs = 2.65 fell at ~31 cm/s; speed ∝ ρs − ρl gives ρs ≈ 2.06.",

@@ -29,14 +29,15 @@ def _atomic_text(path: Path, text: str):
     os.replace(tmp, path)
 
 
-def run_validation(names=None, outdir="reports/validation", overrides=None, cases=None):
-    """Run the named cases (all by default); return the summary dict after writing the report.
+def run_validation(names=None, outdir="reports/validation", overrides=None, cases=None, include_slow=False):
+    """Run the named cases (by default every case not marked ``slow``, or all with
+    ``include_slow``); return the summary dict after writing the report.
 
     ``cases`` may supply configured case objects by name (``demflow compare``).  An existing
     summary in ``outdir`` is kept for the cases not run now, so one page can be refreshed alone.
     """
     outdir = Path(outdir)
-    names = list(names or CASES)
+    names = list(names or [n for n, c in CASES.items() if include_slow or not c.slow])
     cases = dict(CASES, **(cases or {}))
     old = {}
     if (outdir / "summary.json").exists():
@@ -59,7 +60,8 @@ def run_validation(names=None, outdir="reports/validation", overrides=None, case
         tables = [dict(title=t, html=df.to_html(float_format=lambda v: f"{v:.4g}", border=0))
                   for t, df in (case.tables(results, p) if hasattr(case, "tables") else [])]
         summary["cases"][name] = dict(
-            title=case.title, source=case.source, params=p, wall_time_s=round(wall, 3), tables=tables,
+            run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title, source=case.source,
+            params=p, wall_time_s=round(wall, 3), tables=tables,
             passed=all(c.passed for c in checks), assumptions=list(case.assumptions), figures=figs,
             checks=[dict(name=c.name, value=c.value, reference=c.reference, error=c.error,
                          tolerance=c.tolerance, passed=c.passed, source=c.source, why=c.why,
@@ -82,6 +84,14 @@ table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;paddin
 .small{font-size:12px;color:#555}"""
 
 
+def _not_run(summary):
+    missing = [n for n, c in CASES.items() if c.slow and n not in summary["cases"]]
+    if not missing:
+        return ""
+    return ("<p>Slow cases not on this report yet (run <code>demflow validate --case NAME</code> or "
+            f"<code>demflow validate --all</code>): {html.escape(', '.join(missing))}</p>")
+
+
 def write_report(summary, outdir="reports/validation"):
     outdir = Path(outdir)
     rows = []
@@ -90,7 +100,8 @@ def write_report(summary, outdir="reports/validation"):
         rows.append(f"<tr><td><a href='{name}/index.html'>{name}</a></td><td>{html.escape(c['title'])}</td>"
                     f"<td>{html.escape(c['source'])}</td><td>{n_ok}/{len(c['checks'])}</td>"
                     f"<td class='{'pass' if c['passed'] else 'fail'}'>{'PASS' if c['passed'] else 'FAIL'}</td>"
-                    f"<td>{c['wall_time_s']}</td></tr>")
+                    f"<td>{c['wall_time_s']}</td><td class='small'>{c.get('run_at', summary['generated'])}"
+                    f"{' (slow: runs with --all or --case; otherwise kept from its last run)' if c.get('slow') else ''}</td></tr>")
         checks = "".join(
             f"<tr><td>{html.escape(ch['name'])}</td><td>{_fmt(ch['value'])}</td><td>{_fmt(ch['reference'])}</td>"
             f"<td>{_fmt(ch['error'])}</td><td>{_fmt(ch['tolerance'])}</td>"
@@ -124,6 +135,6 @@ def write_report(summary, outdir="reports/validation"):
              f"(Python {summary['python']}, {summary['machine']}). Overall: "
              f"<span class='{'pass' if all_ok else 'fail'}'>{'PASS' if all_ok else 'FAIL'}</span></p>"
              f"<table><tr><th>case</th><th>what</th><th>source</th><th>checks passed</th><th></th><th>wall time [s]</th>"
-             f"</tr>{''.join(rows)}</table></body></html>")
+             f"<th>run at</th></tr>{''.join(rows)}</table>{_not_run(summary)}</body></html>")
     _atomic_text(outdir / "index.html", index)
     _atomic_text(outdir / "summary.json", json.dumps(summary, indent=2, default=str))
