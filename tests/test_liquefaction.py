@@ -1,5 +1,4 @@
 """thesis-liquefaction (§5.3): the column buckles, the contacts break and the pore pressure rises to F_y/L."""
-import numpy as np
 import pytest
 
 from demflow.cases import CASES
@@ -20,12 +19,16 @@ def test_liquefaction_passes_every_check(case, tmp_path):
     assert case.figures(res, p, str(tmp_path))
 
 
-def test_without_load_transfer_the_pore_pressure_stays_near_zero(case):
-    p = case.merged(dict(load=False, study="64"))
+def test_pore_pressure_follows_the_load_handed_to_the_fluid(case):
+    """Half the load in the WallLoad: the wall-1 pressure ends at half of F_y/L, compressive (positive),
+    and the check against F_y/L fails: the pressure is the load transfer's, not an artefact.  (With no
+    WallLoad the constant-volume box has velocity data all round and the pressure is undetermined.)"""
+    p = case.merged(dict(load_factor=0.5, study="64"))
     res = case.run(p)
     q = p["Fy"] / p["box"]
     end = case.wall_pressure(res["wet"].pore_pressure)
-    assert abs(end["bottom"][0]) < 0.01 * q  # no WallLoad: nothing hands the unbalanced load to the fluid
+    # measured 0.9 % off (the unresolved gap under disc A weighs more at half the pressure); the point is
+    # F_y/2L, not F_y/L (a 100 % difference)
+    assert abs(end["bottom"][0] / (0.5 * q) - 1) < 2e-2
     checks = {c.name.split(":")[0]: c for c in case.checks(res, p)}
     assert not checks["pore pressure on wall 1 (BEM, mean along the wall) at γ = 0.7 % vs F_y/L"].passed
-    assert checks["contacts broken"].passed  # the solid phase behaves the same

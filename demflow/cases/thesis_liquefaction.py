@@ -65,7 +65,7 @@ class Liquefaction(Case):
     params = dict(r=5.0, box=30.0, offset=0.5, rho_s=2000.0, kn=0.75e9, ks=0.75e9, cn=1.5e7, cs=1.5e7,
                   phi_dd=22.0, phi_dw=10.0, Fy=1e7, mu=25.0, gamma_rate=7e-3, gamma_end=7e-3, dt=2.5e-3,
                   t_load=3.0, gain=0.5, v_max=0.5, load_tol=1e-2, loading="speed", min_gap=0.05, elements=64, element_length=1.0, stride=10,
-                  study="32,64,128", t_settle=0.05, load=True)
+                  study="32,64,128", t_settle=0.05, load_factor=1.0)
 
     # ------------------------------------------------------------------ scenes
     def laws(self, p):
@@ -102,9 +102,9 @@ class Liquefaction(Case):
                      walls=self.walls(p, W, servo=servo, top_phases=ph), dt=p["dt"], n_steps=n1,
                      outputs=Outputs(every=1, snapshots=(n1,)), description="thesis §5.3 stage 1 (dry loading)")
 
-    def wet_scene(self, p, x, y, y_top, load=True, name="liquefaction-wet"):
+    def wet_scene(self, p, x, y, y_top, name="liquefaction-wet"):
         n2 = self.shear_steps(p)
-        loads = (WallLoad("top", p["Fy"]),) if load else ()
+        loads = (WallLoad("top", p["Fy"] * p["load_factor"]),)
         return Scene(name=name, discs=Discs(list(x), list(y), [p["r"]] * 3, "disc"),
                      materials={"disc": Material(p["rho_s"]), "wall": Material()}, laws=self.laws(p),
                      walls=self.walls(p, y_top, shear=True), dt=p["dt"], n_steps=n2, overlap_tolerance=0.01,
@@ -139,7 +139,7 @@ class Liquefaction(Case):
         ((elements per disc, element length), ...) for the mesh study (returned as {n: pore_pressure rows})."""
         t0 = time.perf_counter()
         y_top = float(dry.wpy[2])
-        wet = build(self.wet_scene(p, dry.x, dry.y, y_top, load=p["load"])).continue_from(dry)
+        wet = build(self.wet_scene(p, dry.x, dry.y, y_top, )).continue_from(dry)
         n2 = self.shear_steps(p)
         wet.run(n2 // 2)
         mesh = {}
@@ -236,7 +236,7 @@ class Liquefaction(Case):
             out.append(Check.against(f"mesh: wall-1 mean pressure at γ = 0.35 %, {n0} vs {ns[-1]} elements per disc",
                                      mesh[n0]["bottom"][0], mesh[ns[-1]]["bottom"][0], "liquefaction.mesh",
                                      "mesh study (this case)"))
-        out.append(_info(f"γ at which F_C(wall 3) first falls below 1 % of F_y", float(g[np.argmax(fc < 0.01 * Fy)]),
+        out.append(_info("γ at which F_C(wall 3) first falls below 1 % of F_y", float(g[np.argmax(fc < 0.01 * Fy)]),
                          p["gamma_end"], SRC))
         out.append(_info("contact damping ratio cN/(2√(kN m)) (text: ≈ 5 %)",
                          p["cn"] / (2 * math.sqrt(p["kn"] * p["rho_s"] * math.pi * p["r"] ** 2)), 0.05, SRC))
@@ -250,7 +250,7 @@ class Liquefaction(Case):
         n2 = self.shear_steps(p)
         fig, axs = plt.subplots(1, 3, figsize=(12, 4.4))
         contact_force_diagram(dres, ax=axs[0])
-        axs[0].set_title(f"dry, loaded to F_y (Fig. 5.9b)")
+        axs[0].set_title("dry, loaded to F_y (Fig. 5.9b)")
         for a, st, tag in ((axs[1], n2 // 2, "0.35"), (axs[2], n2, "0.7")):
             contact_force_diagram(res, step=st, ax=a, max_width=0.4 * p["r"] * res.wall("top").fy.iloc[0] / p["Fy"])
             a.set_title(f"γ = {tag} % (Fig. {'5.10' if tag == '0.35' else '5.11'})")
