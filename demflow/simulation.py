@@ -398,6 +398,9 @@ class Simulation:
         c = min(self.n_hist, other.hist.shape[1])
         h[:, :c] = other.hist[:, :c]  # a stage without shear springs keeps only the normal column
         self.hist = h
+        # the discs' forces on the walls as the other stage left them: a saturated stage's first solve
+        # hands F_A − F_C to the fluid (thesis §5.3.2) before its first step computes them again
+        self.wall_force[:] = other.wall_force
         self.step = 0
         if self.fluid is not None:
             self._next_solve = self.fluid.setup.start

@@ -14,11 +14,13 @@ from .cs_photoelastic import Photoelastic
 from .thesis_bem import CylinderMovingPlanes, CylinderPoiseuille, FreeRectangle
 from .thesis_falling_disc import FallingDisc
 from .thesis_sedimentation import Sedimentation
+from .thesis_liquefaction import Liquefaction
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
 CASES[FallingDisc.name] = FallingDisc()
 CASES[Sedimentation.name] = Sedimentation()
+CASES[Liquefaction.name] = Liquefaction()
 
 
 def get_case(name: str) -> Case:
