@@ -102,6 +102,22 @@ TOLERANCES = {
     "liquefaction.mesh": Tolerance(
         5e-3, "Mesh study of thesis-liquefaction at γ = 0.35 %: wall-1 mean pressure at 32, 64, 128 elements per disc "
               "differs by ≤ 1.3e-3 (measured); the same bound as the pressure check."),
+    "simple-shear.equilibrium": Tolerance(
+        1e-2,
+        "Static equilibrium of the wall forces (thesis Figs 5.24, 5.33, 5.41, 5.49). Rate study of the dry shear, seed 1: "
+        "rms |Σ F| / F_y over the shear 0.87/0.69/0.33/0.24 % (loose) and 0.13/0.04/0.02/0.01 % (dense) at "
+        "γ̇ = 0.2/0.1/0.05/0.02 /s; single slip events reach 6-9 % for a few records (the thesis: 'some oscillations "
+        "between 4 and 7 %'). 1 % rms is three times the loose value at the default γ̇ = 0.05.", absolute=True),
+    "simple-shear.peak-ratio": Tolerance(
+        0.6,
+        "'Peak S/F_y of order 0.2' (thesis 0.2 loose, 0.19 dense, from one 20-disc arrangement that is lost). Over the "
+        "seed ensemble the peak ranges over about a factor 2 (report table); 0.6 relative accepts 0.08-0.32: the same "
+        "order, not the same arrangement."),
+    "simple-shear.incompressible": Tolerance(
+        1e-2,
+        "Walls 1 and 3 of the closed box see the same pore pressure up to the viscous pressure drop (thesis §5.5.4.1: "
+        "'quite similar ... the consequence of incompressibility'); median over the solves, in units of F_y/W. "
+        "Measured 1e-3 to 2e-3 with 16 elements per disc; 1 % leaves room for the mesh (study case).", absolute=True),
 }
 
 

@@ -15,12 +15,16 @@ from .thesis_bem import CylinderMovingPlanes, CylinderPoiseuille, FreeRectangle
 from .thesis_falling_disc import FallingDisc
 from .thesis_sedimentation import Sedimentation
 from .thesis_liquefaction import Liquefaction
+from .thesis_simple_shear import SimpleShear
+from .thesis_simple_shear_study import SimpleShearStudy
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
 CASES[FallingDisc.name] = FallingDisc()
 CASES[Sedimentation.name] = Sedimentation()
 CASES[Liquefaction.name] = Liquefaction()
+CASES[SimpleShear.name] = SimpleShear()
+CASES[SimpleShearStudy.name] = SimpleShearStudy()
 
 
 def get_case(name: str) -> Case:
