@@ -245,15 +245,18 @@ class SimpleShear(Case):
             fig, axs = plt.subplots(1, len(shots), figsize=(4.5 * len(shots), 4))
             for ax, s in zip(np.atleast_1d(axs), shots):
                 contact_force_diagram(res, step=s, ax=ax)
+                q = res.particles[res.particles.step == s]
+                ax.set_xlim(float((q.x - q.radius).min()) - 0.08, float((q.x + q.radius).max()) + 0.08)
+                ax.set_ylim(float((q.y - q.radius).min()) - 0.08, float((q.y + q.radius).max()) + 0.08)
                 ax.set_title(f"{v}: γ = {100 * s * m['dt'] * m['rate']:.1f} %")
             figs.append(save_figure(fig, f"{outdir}/{v}-contact-forces.png"))
             c = curves(res)
             n = 4 if m["saturated"] else 3
             fig, axs = plt.subplots(1, n, figsize=(4.2 * n, 3.6))
             g = 100 * c.gamma
-            axs[0].plot(g, c.S1, lw=0.8, label="S1 (wall 1)")
-            axs[0].plot(g, -c.S3, lw=0.8, label="−S3 (wall 3)")
-            axs[0].plot(g, -c.S, lw=1.2, color="k", label="mean")
+            axs[0].plot(g, -c.S1, lw=0.8, label="−S1 (wall 1)")
+            axs[0].plot(g, c.S3, lw=0.8, label="S3 (wall 3)")
+            axs[0].plot(g, c.S, lw=1.2, color="k", label="mean S")
             axs[0].set_ylabel("shear force [gF]")
             axs[0].legend(fontsize=7)
             if m["saturated"]:
