@@ -121,7 +121,7 @@ class Sedimentation(Case):
                                    vpk / abs(vmed), SRC, "An explicit drag held too long makes the velocity "
                                    "oscillate step to step (thesis §5.2); value: peak speed / median speed"))
         vmax = float(max(-tr[i].vy.min() for i in tr))
-        c = Check(f"largest vertical speed [cm/s] (text: about 20; ρs inferred from it)", vmax, 20.0, float("inf"),
+        c = Check("largest vertical speed [cm/s] (text: about 20; ρs inferred from it)", vmax, 20.0, float("inf"),
                   SRC, "Shown for comparison; not pass/fail (the density was inferred from this speed).")
         c.passed = True
         out.append(c)
