@@ -151,12 +151,14 @@ class Liquefaction(Case):
 
     def run_stages(self, p, dry, study=()):
         """Stage 2 from the dry state; at γ = γ_end/2 the fluid is also solved on the meshes of ``study``
-        ((elements per disc, element length), ...) for the mesh study (returned as {n: pore_pressure rows})."""
+        ((elements per disc, element length), ...) for the mesh study (returned as {n: pore_pressure rows}),
+        and the BEM fields of the solves nearest γ_end/2 and γ_end are kept (:func:`bem_fields`)."""
         t0 = time.perf_counter()
         y_top = float(dry.wpy[2])
         wet = build(self.wet_scene(p, dry.x, dry.y, y_top, )).continue_from(dry)
         n2 = self.shear_steps(p)
         wet.run(n2 // 2)
+        fields = {"0.35": bem_fields(wet.fluid.last_solution, wet.step)}
         mesh = {}
         for n, el in study:
             fc = FluidCoupler(wet, dataclasses.replace(wet.fluid.setup, n_disc=int(n), element_length=float(el)))
@@ -164,11 +166,12 @@ class Liquefaction(Case):
             mesh[int(n)] = pd.DataFrame([dict(wall=w, s=sv, p=pv) for _, w, _, _, ss, q in fc.pressure
                                          for sv, pv in zip(ss, q)])
         wet.run()
+        fields["0.7"] = bem_fields(wet.fluid.last_solution, wet.step)
         res = wet.results()
         res.meta.update(wall_s=time.perf_counter() - t0, y_top=y_top, bem_s=wet.fluid.bem_s, dem_s=wet.dem_s,
                         solves=wet.fluid.solves, strides=sorted({int(k) for _, k in wet.fluid.strides}),
                         loaded_at=int(dry.loaded_at), F_load=float(dry.F_load), F_C0=float(dry.wall_force[2, 1]))
-        return res, mesh
+        return res, mesh, fields
 
     def run(self, p):
         t0 = time.perf_counter()
@@ -176,8 +179,8 @@ class Liquefaction(Case):
         dres = dry.results()
         dres.meta["wall_s"] = time.perf_counter() - t0
         study = [(int(n), p["element_length"] * p["elements"] / int(n)) for n in str(p["study"]).split(",")]
-        res, mesh = self.run_stages(p, dry, study)
-        return {"dry": dres, "wet": res, "mesh-study": mesh}
+        res, mesh, fields = self.run_stages(p, dry, study)
+        return {"dry": dres, "wet": res, "mesh-study": mesh, "bem-fields": fields}
 
     # ------------------------------------------------------------------ checks
     @staticmethod
@@ -291,7 +294,54 @@ class Liquefaction(Case):
         a2.set_title("pressure along the walls at γ = 0.35 % (cf. Fig. 5.12b)")
         a2.legend(fontsize=7)
         f2 = save_figure(fig, f"{outdir}/pore_pressure.png")
-        return [f1, f2]
+        return [f1, f2, bem_figure(results["bem-fields"], f"{outdir}/bem_fields.png")]
+
+
+def bem_fields(sol, step, n_grid=28):
+    """What thesis Figs 5.12-5.13 show of one fluid solve: the boundary elements (ends a, b), the
+    nodal tractions t [F/L²] (on the fluid, t = σn, n out of the fluid) and the velocity [L/T] on
+    an ``n_grid``-wide grid of interior points (eq 4.92; points inside a disc's BEM boundary or
+    outside the box are left out)."""
+    from ..bem.geometry import points_in_polygon
+
+    dom = sol.domain
+    outer = dom.boundaries[0].ends
+    lo, hi = outer.min(axis=0), outer.max(axis=0)
+    gx = np.linspace(lo[0], hi[0], n_grid + 2)[1:-1]
+    gy = np.linspace(lo[1], hi[1], int(round(n_grid * (hi[1] - lo[1]) / (hi[0] - lo[0]))) + 2)[1:-1]
+    pts = np.column_stack([a.ravel() for a in np.meshgrid(gx, gy)])
+    keep = points_in_polygon(pts, outer)
+    for b in dom.boundaries[1:]:
+        keep &= ~points_in_polygon(pts, b.ends)
+    pts = pts[keep]
+    return dict(step=int(step), a=dom.a.copy(), b=dom.b.copy(), nodes=dom.nodes.copy(), t=sol.t.copy(),
+                points=pts, u=sol.interior_velocity(pts))
+
+
+def bem_figure(fields, path):
+    """Thesis Figs 5.12-5.13: per stored solve, (a) the boundary-element discretisation, (b) the
+    fluid's traction on walls and discs (−t), (c) the velocity field."""
+    import matplotlib.pyplot as plt
+
+    fig, axs = plt.subplots(len(fields), 3, figsize=(13, 4.3 * len(fields)), squeeze=False)
+    for row, (tag, f) in zip(axs, fields.items()):
+        segs = np.stack([f["a"], f["b"]], axis=1)
+        for ax in row:
+            ax.plot(segs[:, :, 0].T, segs[:, :, 1].T, "-", color="0.55", lw=0.6)
+            ax.set_aspect("equal")
+            ax.set_xticks([])
+            ax.set_yticks([])
+        row[0].plot(f["a"][:, 0], f["a"][:, 1], "k|", ms=3)
+        row[0].plot(f["nodes"][:, 0], f["nodes"][:, 1], ".", ms=1.5, color="tab:blue")
+        row[0].set_title(f"γ = {tag} %: boundary elements ({len(f['a'])}; nodes dotted)")
+        row[1].quiver(f["nodes"][:, 0], f["nodes"][:, 1], -f["t"][:, 0], -f["t"][:, 1], color="tab:red",
+                      angles="xy", width=0.003)
+        row[1].set_title(f"γ = {tag} %: fluid traction on walls and discs")
+        row[2].quiver(f["points"][:, 0], f["points"][:, 1], f["u"][:, 0], f["u"][:, 1], color="tab:blue",
+                      angles="xy", width=0.003)
+        row[2].set_title(f"γ = {tag} %: fluid velocity")
+    fig.suptitle("Artificial liquefaction, BEM (cf. thesis Figs 5.12-5.13; the solve nearest each γ)")
+    return save_figure(fig, path)
 
 
 def _info(name, value, reference, source):

@@ -139,34 +139,45 @@ class SimpleShear(Case):
                   element_length=0.05, min_gap=0.005, stride=1_000_000, safety=0.5, variants=",".join(VARIANTS),
                   ensemble="1,2,3,4,5,6,7,8")
 
+    @staticmethod
+    def _specimens(p):
+        """The compressed specimens the variants of ``p`` need, each compressed once: {kind: Specimen}."""
+        kinds = dict.fromkeys(v.split("-")[0] for v in str(p["variants"]).split(","))
+        return {kind: setup.compress(kind, int(p["seed"])) for kind in kinds}
+
     def scenes(self, p):
+        specs = self._specimens(p)
         out = {}
         for v in str(p["variants"]).split(","):
             kind, state = v.split("-")
-            spec = setup.compress(kind, int(p["seed"]))
-            out[v] = setup.shear_scene(spec, state == "saturated", rate=float(p["rate"]),
+            out[v] = setup.shear_scene(specs[kind], state == "saturated", rate=float(p["rate"]),
                                        gamma_max=float(p["gamma_max"]))
         return out
 
     def run(self, p):
-        specs = {}
+        specs = self._specimens(p)
         out = {}
         for v in str(p["variants"]).split(","):
             kind, state = v.split("-")
-            if kind not in specs:
-                specs[kind] = setup.compress(kind, int(p["seed"]))
             out[v] = run_variant(specs[kind], state == "saturated", p)
-        self._ensemble = self.ensemble(p) if p["ensemble"] else None
+        done = {(int(p["seed"]), kind): (specs[kind], out[f"{kind}-dry"]) for kind in specs if f"{kind}-dry" in out}
+        self._ensemble = self.ensemble(p, done) if p["ensemble"] else None
         return out
 
     @staticmethod
-    def ensemble(p) -> pd.DataFrame:
-        """Dry shear of both specimens for every seed of ``p['ensemble']`` (DEM only: seconds)."""
+    def ensemble(p, done=None) -> pd.DataFrame:
+        """Dry shear of both specimens for every seed of ``p['ensemble']`` (DEM only: seconds);
+        ``done`` maps (seed, kind) to an already sheared (Specimen, Results) to reuse."""
         rows = []
+        done = done or {}
         for seed in [int(s) for s in str(p["ensemble"]).split(",") if s]:
             for kind in ("loose", "dense"):
-                spec = setup.compress(kind, seed)
-                b = dry_behaviour(run_variant(spec, False, p))
+                if (seed, kind) in done:
+                    spec, res = done[(seed, kind)]
+                else:
+                    spec = setup.compress(kind, seed)
+                    res = run_variant(spec, False, p)
+                b = dry_behaviour(res)
                 rows.append(dict(seed=seed, specimen=kind, width=spec.width, height=spec.height,
                                  e=spec.void_ratio, contracts_throughout=b["dh_max"] <= 0.02,
                                  contracts_then_dilates=b["dh_min"] < -0.02 and b["dh_end"] > b["dh_min"] + 0.2,
@@ -259,8 +270,8 @@ class SimpleShear(Case):
             axs[0].plot(g, c.S, lw=1.2, color="k", label="mean S")
             axs[0].set_ylabel("shear force [gF]")
             axs[0].legend(fontsize=7)
+            pr = pressures(res) if m["saturated"] else None
             if m["saturated"]:
-                pr = pressures(res)
                 gp = 100 * pr.gamma
                 for k, col in (("1", "C0"), ("3", "C3")):
                     axs[1].plot(gp, pr["p" + k], color=col, lw=1, label=f"wall {k} (mean)")
@@ -278,7 +289,6 @@ class SimpleShear(Case):
             axs[j].set_ylabel("force sum on the 4 walls [gF]")
             axs[j].legend(fontsize=7)
             if m["saturated"]:
-                pr = pressures(res)
                 axs[3].plot(100 * pr.gamma, pr.fluid_fx, lw=0.8, label="Σ Fx (fluid)")
                 axs[3].plot(100 * pr.gamma, pr.fluid_fy, lw=0.8, label="Σ Fy (fluid)")
                 axs[3].set_ylabel("fluid force sum on the walls [gF]")
