@@ -25,15 +25,15 @@ Time step (thesis §5.2 found it "by trial and error").  Under a lagged explicit
 disc's velocity obeys v ← v + kΔt(W − K v)/m between solves, which is stable only for
 kΔt < 2τ with τ = m/K the relaxation time of its velocity under its drag (and monotone for
 kΔt < τ).  K is the disc's self-resistance: measured by BEM unit-velocity solves at the start
-(:meth:`FluidCoupler.self_resistance`) and updated as the disc nears a wall with the exact
-one-wall resistance 4πμ/(α − tanh α), cosh α = d/R (long-ranged in 2D: a disc 2R from a wall
-already feels several times its open-fluid drag), and near a neighbour with the lubrication
-resistance (a neighbour is treated like a wall at the same gap); its spin likewise needs kΔt < 2I/K_rot (for a disc in an unbounded fluid
-K_rot = 4πμR², so I/K_rot = m/8πμ, shorter than m/K: rotation is the binding limit of a free
-disc).  The lubrication resistance of two discs at gap h is K_lub = 3√2π μ (R_e/h)^{3/2},
-R_e = R_iR_j/(R_i+R_j).  :meth:`FluidCoupler.stable_stride` gives the number of DEM steps between
-solves that keeps kΔt <= safety·2τ; :meth:`FluidCoupler.time_step_bound` the bound a scene's Δt
-must meet (a wall at the minimum gap), which build() enforces.
+(:meth:`FluidCoupler.self_resistance`) and raised by the growth of the exact one-wall resistance
+4πμ/(α − tanh α), cosh α = d/R (:func:`wall_resistance`; long-ranged in 2D: a disc 2R from a wall
+already feels several times its open-fluid drag) as the disc nears a wall, or a neighbour, which
+is treated like a wall at the same gap (at small gaps that is the squeeze film 3√2π μ (R/h)^{3/2}).
+Its spin likewise needs kΔt < 2I/K_rot (for a disc in an unbounded fluid K_rot = 4πμR², so
+I/K_rot = m/8πμ, shorter than m/K: rotation is the binding limit of a free disc).
+:meth:`FluidCoupler.stable_stride` gives the number of DEM steps between solves that keeps
+kΔt <= safety·2τ; :meth:`FluidCoupler.time_step_bound` the bound a scene's Δt must meet (a wall
+at the minimum gap), which build() enforces.
 
 Units: the scene's consistent units; forces and moments per unit thickness.
 """
@@ -47,14 +47,6 @@ import numpy as np
 
 from .bem.geometry import Boundary, Domain
 from .bem.solve import Problem
-
-LUBRICATION = 3.0 * math.sqrt(2.0) * math.pi  # 2D squeeze-film coefficient of K_lub
-
-
-def lubrication_resistance(mu, r_eff, gap):
-    """Squeeze-film resistance of two cylinders (or a cylinder and a plane, r_eff = R) at gap h,
-    3√2π μ (R_e/h)^{3/2} [force/(length/time) per unit thickness] (leading order in h/R_e)."""
-    return LUBRICATION * mu * (r_eff / gap) ** 1.5
 
 
 def wall_resistance(mu, r, d):
@@ -326,7 +318,7 @@ class FluidCoupler:
         if self.K0 is None:
             self.K0, self.K0rot = self.self_resistance(sim)
         K = self.K0.copy()
-        rp, gw, d = self.last_r, self.last_gw, self.last_dist
+        rp, d = self.last_r, self.last_dist
         dw = np.maximum(side_distances(sim.x, sim.y, self.last_corners), rp[:, None] + st.gap)
         grow = wall_resistance(st.mu, rp[:, None], dw) - wall_resistance(st.mu, rp[:, None], self.d0_walls)
         K += np.sum(np.maximum(grow, 0.0), axis=1)

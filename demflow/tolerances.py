@@ -110,14 +110,15 @@ TOLERANCES = {
         "between 4 and 7 %'). 1 % rms is three times the loose value at the default γ̇ = 0.05.", absolute=True),
     "simple-shear.peak-ratio": Tolerance(
         0.6,
-        "'Peak S/F_y of order 0.2' (thesis 0.2 loose, 0.19 dense, from one 20-disc arrangement that is lost). Over the "
-        "seed ensemble the peak ranges over about a factor 2 (report table); 0.6 relative accepts 0.08-0.32: the same "
-        "order, not the same arrangement."),
+        "'Peak S/F_y of order 0.2' (thesis 0.2 loose, 0.19 dense, from one 20-disc arrangement that is lost). 0.6 "
+        "relative accepts 0.08-0.32, within a factor 2.5 of the thesis: the same order, not the same arrangement. Seed "
+        "ensemble (seeds 1-8, both specimens, dry): peaks 0.042-0.176, 14 of 16 inside (report table)."),
     "simple-shear.incompressible": Tolerance(
         1e-2,
         "Walls 1 and 3 of the closed box see the same pore pressure up to the viscous pressure drop (thesis §5.5.4.1: "
         "'quite similar ... the consequence of incompressibility'); median over the solves, in units of F_y/W. "
-        "Measured 1e-3 to 2e-3 with 16 elements per disc; 1 % leaves room for the mesh (study case).", absolute=True),
+        "Measured 7e-4 and 1.0e-3 (default settings); thesis-simple-shear-study (loose): 1e-4, 1.1e-3, 5.6e-4 at 8, "
+        "16, 32 elements per disc, and 1.1e-2 for the oscillating stride safety 1.0, which 1 % rejects.", absolute=True),
 }
 
 

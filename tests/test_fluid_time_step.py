@@ -78,3 +78,20 @@ def test_near_wall_run_is_stable_at_the_bound_and_not_far_above():
     sim = build(s)
     assert not _unstable(sim, 2000, 1.0)
     assert sim.y[0] - (-20 + 0.5) < 0.0  # in contact with the wall
+
+
+def test_wall_resistance_meets_both_known_limits():
+    """The one-wall resistance 4πμ/(α − tanh α), cosh α = d/R, that raises K near walls and
+    neighbours: at a small gap h it tends to the squeeze film 3√2π μ (R/h)^{3/2} with a first-order
+    error in h/R, and far away to 4πμ/(ln(2d/R) − 1) with an error below (R/d)² (both limits from
+    2D lubrication and the far-field expansion, independent of the closed form)."""
+    from demflow.coupling import wall_resistance
+
+    mu, R = 0.7, 2.0
+    hs = R * np.array([1e-2, 1e-3, 1e-4, 1e-5])
+    near = np.array([wall_resistance(mu, R, R + h) / (3 * math.sqrt(2) * math.pi * mu * (R / h) ** 1.5) - 1 for h in hs])
+    assert np.all(np.abs(near) < 2 * hs / R)
+    assert np.all((near[:-1] / near[1:] > 8) & (near[:-1] / near[1:] < 12))  # first order in h
+    ds = R * np.array([10.0, 100.0, 1000.0])
+    far = np.array([wall_resistance(mu, R, d) / (4 * math.pi * mu / (math.log(2 * d / R) - 1)) - 1 for d in ds])
+    assert np.all(np.abs(far) < (R / ds) ** 2)

@@ -36,7 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Discs, LinearLaw, Material, Outputs, Scene, Servo, Wall, Phase
+from ..scene import Discs, LinearLaw, Material, Outputs, Phase, Scene, Servo, Wall
+from .shear_box import hinged_shear_phases
 
 SIZES = ((3, 0.15), (6, 0.10), (11, 0.05))  # (count, radius [cm]), thesis Table 5.1
 BOX = (1.0, 0.8)  # initial box [cm], thesis §5.4.1
@@ -197,9 +198,7 @@ def shear_scene(spec: Specimen, saturated: bool, *, rate: float = 0.1, gamma_max
     dt = sim.dt * math.sqrt(density_scale)
     n = int(round(gamma_max / (rate * dt)))
     every = max(1, int(round(every_gamma / (rate * dt))))
-    phases = {"bottom": (Phase(n, velocity=(rate * H, 0.0)),),
-              "right": (Phase(n, omega=rate, pivot=(x1, y1)),),
-              "left": (Phase(n, omega=rate, pivot=(x0, y1)),)}
+    phases = hinged_shear_phases(x0, x1, y1, H, rate, n)
     servos = {} if saturated else {"top": Servo(spec.fy, (0.0, -1.0), gain, v_max)}
     snaps = tuple(sorted({0, n} | {int(round(g / (rate * dt))) for g in snapshots_at if g <= gamma_max}))
     fluid = None

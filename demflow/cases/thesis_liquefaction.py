@@ -51,6 +51,7 @@ from ..coupling import FluidCoupler
 from ..plotting import contact_force_diagram, save_figure
 from ..scene import Discs, Fluid, LinearLaw, Material, Outputs, Phase, Scene, Servo, Wall, WallLoad
 from .base import Case, Check
+from .shear_box import hinged_shear_phases
 
 SRC = "thesis §5.3, Figs 5.9-5.14"
 
@@ -93,12 +94,11 @@ class Liquefaction(Case):
         H = y_top
         rate = p["gamma_rate"]
         n2 = self.shear_steps(p)
-        bottom_ph = (Phase(n2, velocity=(rate * H, 0.0)),) if shear else ()
-        side = lambda x: (Phase(n2, omega=rate, pivot=(x, H)),) if shear else ()
-        return [Wall("bottom", (W / 2, 0.0), (1, 0), -W / 2, W / 2, "wall", phases=bottom_ph),
-                Wall("right", (W, H / 2), (0, 1), -H / 2, H / 2, "wall", phases=side(W)),
+        ph = hinged_shear_phases(0.0, W, H, H, rate, n2) if shear else {}
+        return [Wall("bottom", (W / 2, 0.0), (1, 0), -W / 2, W / 2, "wall", phases=ph.get("bottom", ())),
+                Wall("right", (W, H / 2), (0, 1), -H / 2, H / 2, "wall", phases=ph.get("right", ())),
                 Wall("top", (W / 2, H), (-1, 0), -W / 2, W / 2, "wall", servo=servo, phases=top_phases),
-                Wall("left", (0.0, H / 2), (0, -1), -H / 2, H / 2, "wall", phases=side(0.0))]
+                Wall("left", (0.0, H / 2), (0, -1), -H / 2, H / 2, "wall", phases=ph.get("left", ()))]
 
     @staticmethod
     def shear_steps(p):
