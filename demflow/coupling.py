@@ -88,7 +88,7 @@ class FluidSetup:
 
 def wall_lines(sim, setup):
     """Point A and unit direction e of each boundary wall's line, in boundary order."""
-    ax, ay, bx, by = sim._wall_endpoints()
+    ax, ay, bx, by = sim.wall_endpoints()
     w = setup.boundary
     p = np.column_stack([ax[w], ay[w]])
     e = np.column_stack([sim.wex[w], sim.wey[w]])

@@ -69,7 +69,7 @@ class Results:
     def from_simulation(cls, sim) -> "Results":
         dt = sim.dt
         wf, tr, en = [], [], []
-        for steps, wall, wpos, track, energy in sim._records:
+        for steps, wall, wpos, track, energy in sim.records:
             t = steps * dt
             for w, name in enumerate(sim.wall_names):
                 wf.append(pd.DataFrame(dict(step=steps, time=t, wall=name, fx=wall[:, w, 0], fy=wall[:, w, 1],
@@ -79,7 +79,7 @@ class Results:
                                             fn=track[:, k, 0], fs=track[:, k, 1])))
             en.append(pd.DataFrame(dict(step=steps, time=t, kinetic=energy[:, 0], elastic=energy[:, 1])))
         parts, cons, walls = [], [], []
-        for s in sim._snapshots:
+        for s in sim.snapshots:
             p = s["particles"]
             parts.append(pd.DataFrame(dict(step=s["step"], time=s["time"], id=np.arange(sim.n), **p)))
             c = s["contacts"]

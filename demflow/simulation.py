@@ -125,8 +125,8 @@ class Simulation:
         self._slots = tuple(np.zeros(n) for _ in range(11))
         self._r_p, self._mass_p, self._inertia_p, self._C_p, self._Cr_p = (np.zeros(n) for _ in range(5))
         self._mat_p = np.zeros(n, np.int64)
-        self._records = []
-        self._snapshots = []
+        self.records = []
+        self.snapshots = []
         # saturated scenes only (thesis §3.4): the fluid coupling and the external force it feeds
         self.fluid = None
         self._has_ext = False
@@ -145,7 +145,8 @@ class Simulation:
         self.rebuild()
 
     # ------------------------------------------------------------------ contacts
-    def _wall_endpoints(self):
+    def wall_endpoints(self):
+        """Endpoints (ax, ay, bx, by) of every wall segment, A = P + h1·e, B = P + h2·e [length]."""
         ax = self.wpx + self.wh1 * self.wex
         ay = self.wpy + self.wh1 * self.wey
         bx = self.wpx + self.wh2 * self.wex
@@ -154,7 +155,7 @@ class Simulation:
 
     def rebuild(self):
         """Rebuild the neighbour list from current positions, keeping contact history."""
-        ax, ay, bx, by = self._wall_endpoints()
+        ax, ay, bx, by = self.wall_endpoints()
         finder, other = pairs_cell_search(self.x, self.y, self.r, self.skin, ax, ay, bx, by)
         self.hist = transfer_history(self.finder, self.other, self.hist, finder, other, self.n + self.nw)
         self.finder, self.other = finder, other
@@ -297,7 +298,7 @@ class Simulation:
 
     def _store_records(self, q, rec_step, rec_wall, rec_wallpos, rec_track, rec_energy):
         if q:
-            self._records.append((rec_step[:q].copy(), rec_wall[:q].copy(), rec_wallpos[:q].copy(),
+            self.records.append((rec_step[:q].copy(), rec_wall[:q].copy(), rec_wallpos[:q].copy(),
                                   rec_track[:q].copy(), rec_energy[:q].copy()))
 
     # ------------------------------------------------------------------ snapshots
@@ -328,7 +329,7 @@ class Simulation:
 
     def _take_snapshot(self):
         c = self.contact_table_arrays()
-        self._snapshots.append(dict(
+        self.snapshots.append(dict(
             step=self.step, time=self.step * self.dt,
             particles=dict(x=self.x.copy(), y=self.y.copy(), theta=self.th.copy(), vx=self.vx.copy(),
                            vy=self.vy.copy(), omega=self.om.copy(), radius=self.r.copy()),
