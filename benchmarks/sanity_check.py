@@ -53,7 +53,7 @@ def run_once(threads):
                parts=res.particles[["x", "y", "vx", "omega"]].to_numpy(),
                cons=res.contacts[["i", "j", "fn", "fs", "px"]].to_numpy(),
                ct_fn=c["fn"], ct_i=c["finder"], rebuilds=np.array([sim.rebuilds]),
-               Fx=sim._Fx, Fy=sim._Fy, M=sim._M)
+               Fx=sim.discs.Fx, Fy=sim.discs.Fy, M=sim.discs.M)
     return out
 
 

@@ -2,7 +2,7 @@
 
 Scene → build → Simulation → results → analysis → report.
 """
-from .scene import (ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene,
+from .scene import (Box, ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene,
                     SceneError, Servo, Wall)
 from .build import build
 from .simulation import BlowUpError, Simulation
@@ -10,5 +10,5 @@ from .results import Results
 
 __version__ = "0.1.0"
 
-__all__ = ["Scene", "Discs", "Wall", "Phase", "Servo", "Material", "LinearLaw", "ContactModel",
+__all__ = ["Scene", "Box", "Discs", "Wall", "Phase", "Servo", "Material", "LinearLaw", "ContactModel",
            "GlobalDamping", "Outputs", "SceneError", "build", "Simulation", "BlowUpError", "Results"]

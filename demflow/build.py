@@ -9,10 +9,12 @@ import math
 
 import numpy as np
 
-from .integrate import critical_time_step
-from .laws.linear import NORMAL_INCREMENTAL, NORMAL_OVERLAP, SLIDING_CS, SLIDING_THESIS
-from .scene import Scene, SceneError, check_identifier
 from .contacts.neighbours import point_segment_distance
+from .integrate import critical_time_step
+from .laws import FAMILIES
+from .scene import Scene, SceneError, check_identifier
+from .space import open_box, periodic_box, wrap
+from .state import PeriodicBox
 
 
 def _as_array(name, v, n):
@@ -68,9 +70,11 @@ def _check_discs(scene: Scene):
     return x, y, r, mats, mass, inertia, v, om
 
 
-def _check_overlaps(x, y, r, walls, tol):
-    """Refuse initial disc-disc or disc-wall overlaps beyond tol × the smaller radius."""
+def _check_overlaps(x, y, r, walls, tol, box):
+    """Refuse initial disc-disc or disc-wall overlaps beyond tol × the smaller radius (across the
+    boundary too in a periodic box)."""
     from .contacts.neighbours import pairs_cell_search
+    from .contacts.periodic import pairs_periodic
 
     n = x.shape[0]
     if n == 0:
@@ -79,10 +83,16 @@ def _check_overlaps(x, y, r, walls, tol):
     ay = np.array([w[1] for w in walls], dtype=np.float64)
     bx = np.array([w[2] for w in walls], dtype=np.float64)
     by = np.array([w[3] for w in walls], dtype=np.float64)
-    fi, ot = pairs_cell_search(x, y, r, 0.0, ax, ay, bx, by)
-    for i, j in zip(fi, ot):
+    if isinstance(box, PeriodicBox):
+        x, y = x.copy(), y.copy()
+        wrap(box, x, y, np.zeros(n, np.int64), np.zeros(n, np.int64))
+        fi, ot, sx, sy = pairs_periodic(x, y, r, 0.0, ax, ay, bx, by, box)
+    else:
+        fi, ot = pairs_cell_search(x, y, r, 0.0, ax, ay, bx, by)
+        sx = sy = np.zeros(fi.shape[0])
+    for i, j, dx0, dy0 in zip(fi, ot, sx, sy):
         if j < n:
-            dist = math.hypot(x[j] - x[i], y[j] - y[i])
+            dist = math.hypot(x[j] + dx0 - x[i], y[j] + dy0 - y[i])
             ov = r[i] + r[j] - dist
             lim = tol * min(r[i], r[j])
             what = f"discs {min(i, j)} and {max(i, j)}"
@@ -180,6 +190,40 @@ def _check_fluid(scene: Scene, x, y, r, wall_geo):
                       quadrature=int(f.quadrature), start=start)
 
 
+def _law_family(used: dict):
+    """The one law family implementing every declared law that applies (demflow.laws.FAMILIES)."""
+    found = set()
+    for pair, law in used.items():
+        fam = next((f for f in FAMILIES if f.accepts(law)), None)
+        if fam is None:
+            raise SceneError(f"law {pair} is a {type(law).__name__}, which no law family implements; "
+                             f"use one of {[f.name for f in FAMILIES]}")
+        found.add(fam)
+    if len(found) > 1:
+        raise SceneError(f"the scene mixes law families {sorted(f.name for f in found)}; "
+                         "declare every material pair's law in one family")
+    return found.pop() if found else FAMILIES[0]
+
+
+def _check_box(scene: Scene, r, x, y):
+    """The compiled box of ``scene.box``: open, or periodic (period >= twice the neighbour reach)."""
+    b = scene.box
+    b.check()
+    if not b.periodic:
+        return open_box()
+    (x0, x1) = b.periodic_x if b.periodic_x is not None else (0.0, math.inf)
+    (y0, y1) = b.periodic_y if b.periodic_y is not None else (0.0, math.inf)
+    box = periodic_box(float(x0), float(y0), float(x1) - float(x0), float(y1) - float(y0))
+    skin = scene.skin if scene.skin is not None else (0.2 * float(r.mean()) if r.size else 1.0)
+    from .contacts.periodic import check_period
+
+    try:
+        check_period(box, r, skin)
+    except ValueError as e:
+        raise SceneError(f"box: {e}") from None
+    return box
+
+
 def build(scene: Scene):
     """Check ``scene`` and return a ready :class:`~demflow.simulation.Simulation`."""
     from .simulation import Simulation
@@ -229,28 +273,23 @@ def build(scene: Scene):
             if math.hypot(*s.direction) == 0:
                 raise SceneError(f"wall {w.name!r}: servo direction is zero; give the unit load direction")
 
-    # laws for every material pair that can meet
+    # laws for every material pair that can meet, and the one law family that implements them
     mat_names = sorted(scene.materials)
     mid = {m: k for k, m in enumerate(mat_names)}
-    nm = len(mat_names)
-    tables = {k: np.zeros((nm, nm)) for k in ("kn", "ks", "cn", "cs", "mu", "coh")}
     disc_mats = sorted(set(mats))
     wall_mats = sorted({w.material for w in scene.walls})
     count = {m: mats.count(m) for m in disc_mats}
     needed = [(a, b) for ia, a in enumerate(disc_mats) for b in disc_mats[ia:]
               if (a != b or count[a] >= 2)]
     needed += [(a, b) for a in disc_mats for b in wall_mats]
-    used = set()
+    used = {}
     for a, b in needed:
         law = scene.law_for(a, b)
         law.check((a, b))
-        used.add((a, b))
-        for key in tables:
-            val = {"mu": law.friction, "coh": law.cohesion}.get(key, getattr(law, key, None))
-            tables[key][mid[a], mid[b]] = val
-            tables[key][mid[b], mid[a]] = val
-    has_shear = bool(any(scene.law_for(a, b).ks > 0 for a, b in used))
-    k_max = max([max(scene.law_for(a, b).kn, scene.law_for(a, b).ks) for a, b in used], default=0.0)
+        used[(a, b)] = law
+    family = _law_family(used)
+    law = family(scene, used, mid)
+    k_max = max([law.stiffness_bound(lw) for lw in used.values()], default=0.0)
 
     # time step
     dt_crit = critical_time_step(mass, k_max)
@@ -271,8 +310,9 @@ def build(scene: Scene):
                 "(10 % of critical, thesis §2.2.4.4) or set allow_supercritical=True"
             )
 
+    box = _check_box(scene, r, x, y)
     if n:
-        _check_overlaps(x, y, r, wall_geo, scene.overlap_tolerance)
+        _check_overlaps(x, y, r, wall_geo, scene.overlap_tolerance, box)
 
     # damping per disc
     d = scene.damping
@@ -313,16 +353,12 @@ def build(scene: Scene):
 
     fluid = _check_fluid(scene, x, y, r, wall_geo) if scene.fluid is not None else None
 
-    normal_mode = NORMAL_INCREMENTAL if scene.contact_model.normal == "incremental" else NORMAL_OVERLAP
-    sliding_mode = SLIDING_CS if scene.contact_model.sliding == "cs" else SLIDING_THESIS
-
     sim = Simulation(
         scene=scene, x=x, y=y, r=r, mass=mass, inertia=inertia, v=v, om=om,
         mat=np.array([mid[m] for m in mats], dtype=np.int64),
         wall_geo=wall_geo, wall_mat=np.array([mid[w.material] for w in scene.walls], dtype=np.int64),
-        tables=tables, has_shear=has_shear, dt=dt, dt_crit=dt_crit, C=C, Cr=Cr, skin=skin,
-        gravity=tuple(map(float, scene.gravity)), normal_mode=normal_mode, sliding_mode=sliding_mode,
-        track=track, material_names=mat_names, fluid=fluid,
+        law=law, dt=dt, dt_crit=dt_crit, C=C, Cr=Cr, skin=skin,
+        gravity=tuple(map(float, scene.gravity)), track=track, material_names=mat_names, fluid=fluid, box=box,
     )
     if fluid is not None:
         # the fluid's own stability limit (explicit lagged drag, see demflow.coupling)

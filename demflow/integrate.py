@@ -29,22 +29,32 @@ def critical_time_step(mass: np.ndarray, stiffness_max: float) -> float:
 
 
 @njit_parallel
-def sum_and_integrate(start, sidx, f, r, x, y, th, vx, vy, om, mass, inertia, C, Cr, gx, gy, dt,
-                      xref, yref, P, Fx, Fy, M, ext, ext_perm, has_ext):
+def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
-    Each disc sums its contacts in CSR order: ``sidx[e]`` is the contact index k when the disc is the pair's
-    finder and -(k+1) when it is the other disc; f[k] = (fx, fy, Fs) from
-    :func:`demflow.contacts.forces.contact_forces_step`, the moment being Fs·R of the disc.
-    The update is thesis eqs 2.27-2.30 (see the module docstring); the new x, y, v, ω are also written to the
-    packed rows P (see :func:`demflow.contacts.forces.pack_discs`), the contact sums to Fx, Fy, M.
-    With ``has_ext`` the external force and moment ``ext[ext_perm[i]]`` = (fx, fy, m) (the fluid
-    force, moment and buoyancy of a saturated scene, thesis §3.4 and eq 4.39, in disc order,
-    ``ext_perm`` mapping slot to disc) is added to disc i's sums; without it ``ext`` is not read.
-    Returns the largest squared displacement since (xref, yref) and the largest squared
-    displacement of this step in radii ((|v|Δt/R)², a disc that jumps a large part of its
-    radius in one step can pass through a contact unseen).
+    ``d`` (:class:`~demflow.state.Discs`, slot order).  Each disc sums its contacts in CSR order:
+    ``sidx[e]`` is the contact index k when the disc is the pair's finder and -(k+1) when it is the
+    other disc; f[k] = (fx, fy, Fs) from :func:`demflow.contacts.forces.pair_forces`, the moment
+    being Fs·R of the disc.  The update is thesis eqs 2.27-2.30 (see the module docstring); the new
+    x, y, v, ω are also written to the packed rows P (see :func:`demflow.contacts.forces.pack_discs`),
+    the contact sums to d.Fx, d.Fy, d.M.  With ``has_ext`` the external force and moment
+    ``ext[ext_perm[i]]`` = (fx, fy, m) (the fluid force, moment and buoyancy of a saturated scene,
+    thesis §3.4 and eq 4.39, in disc order, ``ext_perm`` mapping slot to disc) is added to disc i's
+    sums; without it ``ext`` is not read.  Returns the largest squared displacement since
+    (xref, yref) and the largest squared displacement of this step in radii ((|v|Δt/R)², a disc
+    that jumps a large part of its radius in one step can pass through a contact unseen).
     """
+    # fields are read into local names before the prange loop: Numba (0.68) loses writes made
+    # through a namedtuple's field inside a parallel loop (see demflow.jit)
+    x = d.x
+    y = d.y
+    vx = d.vx
+    vy = d.vy
+    om = d.om
+    r = d.r
+    mass = d.mass
+    inertia = d.inertia
+    th, C, Cr, xref, yref, Fx, Fy, M = d.th, d.C, d.Cr, d.xref, d.yref, d.Fx, d.Fy, d.M
     n = x.shape[0]
     dmax2 = 0.0
     jump2 = 0.0

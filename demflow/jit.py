@@ -1,7 +1,7 @@
 """The one set of JIT flags every demflow kernel is compiled with.
 
-All kernels are compiled by :func:`njit` (serial) or :func:`njit_parallel`
-(``prange`` loops).  ``cache=True`` keeps compiled code between processes;
+All kernels are compiled by :func:`njit` (serial), :func:`njit_parallel`
+(``prange`` loops) or :func:`njit_inline` (helpers inlined into their caller).  ``cache=True`` keeps compiled code between processes;
 ``fastmath`` stays off so results are bit-reproducible across runs (determinism:
 same scene, same seed, same results).
 """
@@ -15,7 +15,15 @@ JIT_FLAGS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
 njit = numba.njit(**JIT_FLAGS)
 
+# Per-pair and per-disc helpers that take arrays are inlined at the Numba IR level: a compiled call
+# with array arguments updates reference counts (atomic, serialising threads) on every call.
+njit_inline = numba.njit(inline="always", **JIT_FLAGS)
 
+
+# Parallel kernels and namedtuples of arrays (demflow.state): Numba 0.68 silently drops writes made
+# as ``struct.field[i] = v`` inside a prange body, and in the pair kernel even writes through
+# fields read into local names before the loop were lost (measured; the golden tests catch it).
+# So the arrays a prange loop writes are passed to it as plain arguments; structures are read only.
 def njit_parallel(func):
     """Compile ``func`` with ``parallel=True`` (its ``prange`` loops run on threads)."""
     return numba.njit(parallel=True, **JIT_FLAGS)(func)

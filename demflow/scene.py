@@ -76,6 +76,37 @@ class LinearLaw:
 
 
 @dataclass(frozen=True)
+class Box:
+    """The space the discs live in: open (the default), or periodic along x and/or y.
+
+    periodic_x : (x0, x1) [length], the period along x is x1 - x0 (None: not periodic in x)
+    periodic_y : (y0, y1) [length], likewise along y
+    A periodic axis wraps disc centres into [x0, x1) (image counters keep unwrapped
+    displacements) and lists contacts across the boundary by minimum image; its period must be
+    at least twice 2·r_max + skin.  Walls are not repeated: a floor in a box periodic along x
+    should span it.
+    """
+
+    periodic_x: tuple[float, float] | None = None
+    periodic_y: tuple[float, float] | None = None
+
+    def check(self) -> None:
+        for axis, b in (("x", self.periodic_x), ("y", self.periodic_y)):
+            if b is None:
+                continue
+            try:
+                lo, hi = (float(v) for v in b)
+            except (TypeError, ValueError):
+                raise SceneError(f"box periodic_{axis}={b!r}; give the bounds as two numbers (lo, hi)") from None
+            if not (math.isfinite(lo) and math.isfinite(hi) and hi > lo):
+                raise SceneError(f"box periodic_{axis}=({lo}, {hi}); give finite bounds with hi > lo")
+
+    @property
+    def periodic(self) -> bool:
+        return self.periodic_x is not None or self.periodic_y is not None
+
+
+@dataclass(frozen=True)
 class ContactModel:
     """Scene-wide choices of the contact law's variants.
 
@@ -293,6 +324,7 @@ class Scene:
     n_steps : default run length in steps (cycles)
     skin : neighbour-list margin (thesis DNTOL, eq 2.33) [length]; None = 0.2 × mean radius
     fluid : the pore fluid (:class:`Fluid`) of a saturated scene; None for a dry one
+    box : the space (:class:`Box`): open by default, or periodic along x and/or y
     """
 
     name: str
@@ -312,6 +344,7 @@ class Scene:
     outputs: Outputs = Outputs()
     description: str = ""
     fluid: Fluid | None = None  # a saturated scene (thesis §3.4); None: dry, nothing fluid is built
+    box: Box = Box()
 
     def law_for(self, a: str, b: str) -> LinearLaw:
         """The law of a material pair, in either order; a clear error if none is declared."""

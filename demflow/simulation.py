@@ -14,9 +14,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .contacts.forces import contact_forces
+from .contacts.forces import pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
                                   spatial_order, transfer_history)
+from .contacts.periodic import pairs_periodic
+from .space import wrap
+from .state import (Discs, Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
+                    pair_outputs)
 from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps
 
 
@@ -28,13 +32,36 @@ class BlowUpError(RuntimeError):
         self.path = path
 
 
-# arrays that make up the dynamic state (what a checkpoint stores)
-_STATE = ("x", "y", "th", "vx", "vy", "om", "wpx", "wpy", "wex", "wey", "wvx", "wvy", "wom",
-          "wcx", "wcy", "finder", "other", "hist")
+# arrays that make up the dynamic state (what a checkpoint stores), by the structure that holds them
+_DISC_STATE = ("x", "y", "th", "vx", "vy", "om")
+_WALL_STATE = {"wpx": "px", "wpy": "py", "wex": "ex", "wey": "ey", "wvx": "vx", "wvy": "vy", "wom": "om",
+               "wcx": "cx", "wcy": "cy"}
+_PAIR_STATE = ("finder", "other", "hist")
+_STATE = _DISC_STATE + tuple(_WALL_STATE) + _PAIR_STATE
+# wall attributes by their historical names (sim.wpx is sim.walls.px)
+_WALL_ALIASES = dict(_WALL_STATE, wh1="h1", wh2="h2", wmat="mat", wall_force="force")
+
+
+def _disc_alias(field):
+    return property(lambda self: getattr(self.discs, field), doc=f"discs.{field} (disc order)")
+
+
+def _wall_alias(field):
+    return property(lambda self: getattr(self.walls, field), doc=f"walls.{field}")
+
+
+def _pair_alias(field):
+    return property(lambda self: getattr(self.pairs, field), doc=f"pairs.{field} (key order)")
 
 
 class Simulation:
-    """State and stepping of one 2D disc scene (see :mod:`demflow.build`)."""
+    """State and stepping of one 2D disc scene (see :mod:`demflow.build`).
+
+    The state lives in a few named structures of arrays (:mod:`demflow.state`): ``discs``
+    (disc order), ``walls`` and ``loading``, ``pairs`` (the neighbour list with its history, key
+    order), plus the law's compiled parameters ``law_params`` and the ``box``.  ``x``, ``vx``,
+    ``wpx``, ``hist``, ... are read-only names for fields of these structures.
+    """
 
     CHUNK = 20000  # steps between last-good-state copies
     # Below this many discs a step is too short to share between threads: on this 2-core
@@ -43,141 +70,164 @@ class Simulation:
     # (0.91× at 4000, 1.74× at 10000).
     PARALLEL_MIN_DISCS = 8000
 
-    def __init__(self, *, scene, x, y, r, mass, inertia, v, om, mat, wall_geo, wall_mat, tables,
-                 has_shear, dt, dt_crit, C, Cr, skin, gravity, normal_mode, sliding_mode, track,
-                 material_names, fluid=None):
+    for _f in ("x", "y", "th", "vx", "vy", "om", "r", "mass", "inertia", "mat", "C", "Cr"):
+        locals()[_f] = _disc_alias(_f)
+    for _a, _f in _WALL_ALIASES.items():
+        locals()[_a] = _wall_alias(_f)
+    for _f in _PAIR_STATE:
+        locals()[_f] = _pair_alias(_f)
+    del _a, _f
+
+    def __init__(self, *, scene, x, y, r, mass, inertia, v, om, mat, wall_geo, wall_mat, law, dt, dt_crit,
+                 C, Cr, skin, gravity, track, material_names, box, fluid=None):
         self.scene = scene
         self.dt = dt
         self.dt_crit = dt_crit
         self.dt_fluid = None  # the fluid drag limit of a saturated scene (set by build)
         self.skin = skin
-        self.has_shear = has_shear
-        self.normal_mode = normal_mode
-        self.sliding_mode = sliding_mode
+        self.law = law  # the law family (demflow.laws), Python side
+        self.law_params = law.params()  # what the compiled cycle reads
+        self.box = box
         self.material_names = material_names
         self.gx, self.gy = gravity
         n = x.shape[0]
         self.n = n
-        self.x, self.y = x.copy(), y.copy()
-        self.th = np.zeros(n)
-        self.vx, self.vy = v[:, 0].copy(), v[:, 1].copy()
-        self.om = om.copy()
-        self.r, self.mass, self.inertia, self.mat = r, mass, inertia, mat
-        self.C, self.Cr = C, Cr
-        self.t = tables
-        # walls
-        nw = len(wall_geo)
-        self.nw = nw
-        g = np.array(wall_geo, dtype=np.float64).reshape(nw, 8)
-        self.wpx, self.wpy = g[:, 4].copy(), g[:, 5].copy()
-        self.wex, self.wey = g[:, 6].copy(), g[:, 7].copy()
-        self.wh1 = np.array([w.h1 for w in scene.walls], dtype=np.float64)
-        self.wh2 = np.array([w.h2 for w in scene.walls], dtype=np.float64)
-        self.wvx, self.wvy, self.wom = np.zeros(nw), np.zeros(nw), np.zeros(nw)
-        self.wcx, self.wcy = self.wpx.copy(), self.wpy.copy()
-        self.wmat = wall_mat
-        self.wall_force = np.zeros((nw, 3))
-        self.wall_names = [w.name for w in scene.walls]
-        K = max([len(w.phases) for w in scene.walls], default=0) or 1
-        self.phase_start = np.zeros((nw, K), np.int64)
-        self.phase_end = np.zeros((nw, K), np.int64)
-        self.phase_vx, self.phase_vy, self.phase_om = (np.zeros((nw, K)) for _ in range(3))
-        self.phase_cx, self.phase_cy = np.zeros((nw, K)), np.zeros((nw, K))
-        self.phase_about_p = np.ones((nw, K), np.int8)
-        for w, wall in enumerate(scene.walls):
-            s0 = 0
-            for k, ph in enumerate(wall.phases):
-                self.phase_start[w, k] = s0
-                self.phase_end[w, k] = s0 + int(ph.cycles)
-                s0 += int(ph.cycles)
-                self.phase_vx[w, k], self.phase_vy[w, k] = map(float, ph.velocity)
-                self.phase_om[w, k] = float(ph.omega)
-                if ph.pivot is not None:
-                    self.phase_about_p[w, k] = 0
-                    self.phase_cx[w, k], self.phase_cy[w, k] = map(float, ph.pivot)
-        self.servo_on = np.zeros(nw, np.int8)
-        self.servo_start = np.zeros(nw, np.int64)
-        self.servo_F, self.servo_dx, self.servo_dy, self.servo_G, self.servo_vmax = (
-            np.zeros(nw) for _ in range(5))
-        for w, wall in enumerate(scene.walls):
-            if wall.servo is not None:
-                s = wall.servo
-                L = float(np.hypot(*s.direction))
-                self.servo_on[w] = 1
-                self.servo_start[w] = s.start
-                self.servo_F[w] = s.force
-                self.servo_dx[w], self.servo_dy[w] = s.direction[0] / L, s.direction[1] / L
-                self.servo_G[w], self.servo_vmax[w] = s.gain, s.v_max
-        # contacts: history has a shear column only when some law has a shear spring
-        self.n_hist = 2 if has_shear else 1
-        self.finder = np.empty(0, np.int64)
-        self.other = np.empty(0, np.int64)
-        self.hist = np.zeros((0, self.n_hist))
+        d = new_discs(n)
+        d.x[:], d.y[:], d.vx[:], d.vy[:], d.om[:] = x, y, v[:, 0], v[:, 1], om
+        d.r[:], d.mass[:], d.inertia[:], d.mat[:], d.C[:], d.Cr[:] = r, mass, inertia, mat, C, Cr
+        self.discs = d
+        self.ix = np.zeros(n, np.int64)  # periods crossed along x and y (periodic boxes)
+        self.iy = np.zeros(n, np.int64)
+        self._walls_init(scene, wall_geo, wall_mat)
+        self.pairs = empty_pairs(law.history_width(2))
         self.track_a = np.array([a for a, _ in track], dtype=np.int64)
         self.track_b = np.array([b for _, b in track], dtype=np.int64)
         self.track = track
         self.step = 0
         self.disp_walls = 0.0
         self.rebuilds = 0
-        self._P = np.zeros((n, 8))  # packed disc rows for the pair-force kernel
-        self._Fx, self._Fy, self._M = (np.zeros(n) for _ in range(3))  # last step's force sums
-        # by slot: x, y, th, vx, vy, om, xref, yref, Fx, Fy, M
-        self._slots = tuple(np.zeros(n) for _ in range(11))
-        self._r_p, self._mass_p, self._inertia_p, self._C_p, self._Cr_p = (np.zeros(n) for _ in range(5))
-        self._mat_p = np.zeros(n, np.int64)
+        self._slots = new_discs(n)
+        self.layout = Layout(perm=np.arange(n, dtype=np.int64), inv=np.arange(n, dtype=np.int64),
+                             P=np.zeros((n, 8)))
         self.records = []
         self.snapshots = []
         # saturated scenes only (thesis §3.4): the fluid coupling and the external force it feeds
         self.fluid = None
-        self._has_ext = False
-        self._ext = np.zeros((0, 3))
+        self.has_external_force = False
+        self.external_force = np.zeros((0, 3))
         self.dem_s = 0.0
         if fluid is not None:
             from .coupling import FluidCoupler
 
             self.fluid = FluidCoupler(self, fluid)
-            self._has_ext = True
-            self._ext = np.zeros((n, 3))
+            self.has_external_force = True
+            self.external_force = np.zeros((n, 3))
             # buoyancy B = -ρ_l A g, A = πR² (thesis eq 4.39)
             area = np.pi * r * r
             self._buoyancy = -fluid.rho * area[:, None] * np.array([self.gx, self.gy])[None, :]
             self._next_solve = self.fluid.setup.start
         self.rebuild()
 
+    def _walls_init(self, scene, wall_geo, wall_mat):
+        nw = len(wall_geo)
+        self.nw = nw
+        g = np.array(wall_geo, dtype=np.float64).reshape(nw, 8)
+        px, py = g[:, 4].copy(), g[:, 5].copy()
+        self.walls = Walls(px=px, py=py, ex=g[:, 6].copy(), ey=g[:, 7].copy(),
+                           h1=np.array([w.h1 for w in scene.walls], dtype=np.float64),
+                           h2=np.array([w.h2 for w in scene.walls], dtype=np.float64),
+                           vx=np.zeros(nw), vy=np.zeros(nw), om=np.zeros(nw), cx=px.copy(), cy=py.copy(),
+                           mat=wall_mat, force=np.zeros((nw, 3)))
+        self.wall_names = [w.name for w in scene.walls]
+        K = max([len(w.phases) for w in scene.walls], default=0) or 1
+        ld = Loading(phase_start=np.zeros((nw, K), np.int64), phase_end=np.zeros((nw, K), np.int64),
+                     phase_vx=np.zeros((nw, K)), phase_vy=np.zeros((nw, K)), phase_om=np.zeros((nw, K)),
+                     phase_cx=np.zeros((nw, K)), phase_cy=np.zeros((nw, K)),
+                     phase_about_p=np.ones((nw, K), np.int8), servo_on=np.zeros(nw, np.int8),
+                     servo_start=np.zeros(nw, np.int64), servo_F=np.zeros(nw), servo_dx=np.zeros(nw),
+                     servo_dy=np.zeros(nw), servo_G=np.zeros(nw), servo_vmax=np.zeros(nw))
+        for w, wall in enumerate(scene.walls):
+            s0 = 0
+            for k, ph in enumerate(wall.phases):
+                ld.phase_start[w, k] = s0
+                ld.phase_end[w, k] = s0 + int(ph.cycles)
+                s0 += int(ph.cycles)
+                ld.phase_vx[w, k], ld.phase_vy[w, k] = map(float, ph.velocity)
+                ld.phase_om[w, k] = float(ph.omega)
+                if ph.pivot is not None:
+                    ld.phase_about_p[w, k] = 0
+                    ld.phase_cx[w, k], ld.phase_cy[w, k] = map(float, ph.pivot)
+            if wall.servo is not None:
+                s = wall.servo
+                L = float(np.hypot(*s.direction))
+                ld.servo_on[w] = 1
+                ld.servo_start[w] = s.start
+                ld.servo_F[w] = s.force
+                ld.servo_dx[w], ld.servo_dy[w] = s.direction[0] / L, s.direction[1] / L
+                ld.servo_G[w], ld.servo_vmax[w] = s.gain, s.v_max
+        self.loading = ld
+
+    # the linear law's parameters by their historical names
+    @property
+    def t(self) -> dict:
+        """The law's per-material-pair tables (linear law: kn, ks, cn, cs, mu, coh)."""
+        return self.law.tables()
+
+    @property
+    def has_shear(self) -> bool:
+        return bool(self.law_params.has_shear)
+
+    @property
+    def n_hist(self) -> int:
+        return self.pairs.hist.shape[1]
+
     # ------------------------------------------------------------------ contacts
     def wall_endpoints(self):
         """Endpoints (ax, ay, bx, by) of every wall segment, A = P + h1·e, B = P + h2·e [length]."""
-        ax = self.wpx + self.wh1 * self.wex
-        ay = self.wpy + self.wh1 * self.wey
-        bx = self.wpx + self.wh2 * self.wex
-        by = self.wpy + self.wh2 * self.wey
-        return ax, ay, bx, by
+        w = self.walls
+        return w.px + w.h1 * w.ex, w.py + w.h1 * w.ey, w.px + w.h2 * w.ex, w.py + w.h2 * w.ey
+
+    def unwrapped_positions(self):
+        """Disc centres with the periods crossed added back (periodic boxes) [length]."""
+        x, y = self.discs.x.copy(), self.discs.y.copy()
+        if isinstance(self.box, PeriodicBox):
+            if self.box.periodic_x:
+                x += self.ix * self.box.lx
+            if self.box.periodic_y:
+                y += self.iy * self.box.ly
+        return x, y
 
     def rebuild(self):
-        """Rebuild the neighbour list from current positions, keeping contact history."""
+        """Rebuild the neighbour list from current positions, keeping contact history (keyed by pair).
+        In a periodic box the centres are wrapped into the box first."""
+        d = self.discs
+        wrap(self.box, d.x, d.y, self.ix, self.iy)
         ax, ay, bx, by = self.wall_endpoints()
-        finder, other = pairs_cell_search(self.x, self.y, self.r, self.skin, ax, ay, bx, by)
-        self.hist = transfer_history(self.finder, self.other, self.hist, finder, other, self.n + self.nw)
-        self.finder, self.other = finder, other
+        if isinstance(self.box, PeriodicBox):
+            finder, other, sx, sy = pairs_periodic(d.x, d.y, d.r, self.skin, ax, ay, bx, by, self.box)
+        else:
+            finder, other = pairs_cell_search(d.x, d.y, d.r, self.skin, ax, ay, bx, by)
+            sx = sy = np.empty(0)
+        old = self.pairs
+        hist = transfer_history(old.finder, old.other, old.hist, finder, other, self.n + self.nw)
         start, sidx = contacts_of_particles_signed(finder, other, self.n)
         wall_pairs = np.flatnonzero(other >= self.n).astype(np.int64)
         # the steps run on the discs renumbered in spatial order (see stepping.run_steps)
-        self._perm = spatial_order(self.x, self.y, self.r, self.skin)
-        (self._inv, self._pos, self._fin_p, self._oth_p, self._start_p, self._sidx_p,
-         self._wall_p) = internal_layout(finder, other, self.n, self._perm, start, sidx, wall_pairs)
+        perm = spatial_order(d.x, d.y, d.r, self.skin)
+        inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p = internal_layout(finder, other, self.n, perm, start, sidx,
+                                                                          wall_pairs)
+        sx_p, sy_p = np.empty_like(sx), np.empty_like(sy)
+        sx_p[pos[:sx.shape[0]]] = sx
+        sy_p[pos[:sy.shape[0]]] = sy
         m = finder.shape[0]
-        self._hist_p = np.empty_like(self.hist)
-        self._f = np.zeros((m, 3))  # (fx, fy, Fs) per pair, the per-step work array
-        self._fn, self._fs, self._ovl, self._cpx, self._cpy = (np.zeros(m) for _ in range(5))
-        self._slide = np.zeros(m, np.int8)
-        self.xref, self.yref = self.x.copy(), self.y.copy()
+        self.pairs = Pairs(finder=finder, other=other, hist=hist, sx=sx, sy=sy, pos=pos, fin_p=fin_p, oth_p=oth_p,
+                           hist_p=np.empty_like(hist), sx_p=sx_p, sy_p=sy_p, start_p=start_p, sidx_p=sidx_p,
+                           wall_p=wall_p, f=np.zeros((m, 3)), out=pair_outputs(m))
+        self.layout = self.layout._replace(perm=perm, inv=inv)
+        d.xref[:] = d.x
+        d.yref[:] = d.y
         self.disp_walls = 0.0
         self.rebuilds += 1
-
-    def _law_args(self):
-        t = self.t
-        return (t["kn"], t["ks"], t["cn"], t["cs"], t["mu"], t["coh"], self.dt,
-                self.normal_mode, self.sliding_mode, self.has_shear)
 
     # ------------------------------------------------------------------ running
     def run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
@@ -209,11 +259,9 @@ class Simulation:
         every = int(self.scene.outputs.every)
         nrec = (n_steps // every + 2) if every > 0 else 0
         nt = len(self.track)
-        rec_step = np.zeros(nrec, np.int64)
-        rec_wall = np.zeros((nrec, self.nw, 3))
-        rec_wallpos = np.zeros((nrec, self.nw, 2))
-        rec_track = np.zeros((nrec, nt, 2))
-        rec_energy = np.zeros((nrec, 2))
+        rec = Records(every=every, step=np.zeros(nrec, np.int64), wall=np.zeros((nrec, self.nw, 3)),
+                      wallpos=np.zeros((nrec, self.nw, 2)), track_a=self.track_a, track_b=self.track_b,
+                      track=np.zeros((nrec, nt, 2)), energy=np.zeros((nrec, 2)))
         rec_count = 0
         snaps = sorted(s for s in self.scene.outputs.snapshots if self.step <= s <= target)
         last_ckpt = self.step
@@ -236,27 +284,13 @@ class Simulation:
                     n_run = min(n_run, self._next_solve - self.step)
                 t_dem = time.perf_counter()
                 done, status, self.disp_walls, rec_count = run_steps(
-                    n_run, self.step, self.skin, self.disp_walls,
-                    self.x, self.y, self.th, self.vx, self.vy, self.om, self.r, self.mass, self.inertia,
-                    self.C, self.Cr, self.mat, self.xref, self.yref, self.gx, self.gy,
-                    self._perm, self._inv, self._r_p, self._mass_p, self._inertia_p, self._C_p, self._Cr_p,
-                    self._mat_p, *self._slots, self._P, self._Fx, self._Fy, self._M,
-                    self.finder, self.other, self.hist, self._pos, self._fin_p, self._oth_p, self._hist_p,
-                    self._start_p, self._sidx_p, self._wall_p,
-                    self._f, self._fn, self._fs, self._slide, self._ovl, self._cpx, self._cpy,
-                    self.wpx, self.wpy, self.wex, self.wey, self.wh1, self.wh2, self.wvx, self.wvy,
-                    self.wom, self.wcx, self.wcy, self.wmat, self.wall_force,
-                    self.phase_start, self.phase_end, self.phase_vx, self.phase_vy, self.phase_om,
-                    self.phase_cx, self.phase_cy, self.phase_about_p,
-                    self.servo_on, self.servo_start, self.servo_F, self.servo_dx, self.servo_dy,
-                    self.servo_G, self.servo_vmax,
-                    *self._law_args(),
-                    every, rec_count, rec_step, rec_wall, rec_wallpos, self.track_a, self.track_b,
-                    rec_track, rec_energy, self._ext, self._has_ext)
+                    n_run, self.step, self.skin, self.disp_walls, self.discs, self._slots, self.layout,
+                    self.pairs, self.walls, self.loading, self.law_params, self.box, self.dt, self.gx, self.gy,
+                    rec, rec_count, self.external_force, self.has_external_force)
                 self.dem_s += time.perf_counter() - t_dem
                 self.step += done
                 if status == BLOWUP:
-                    self._store_records(rec_count, rec_step, rec_wall, rec_wallpos, rec_track, rec_energy)
+                    self._store_records(rec_count, rec)
                     bad_step = self.step
                     self._restore_state(good)
                     path = self._save_last_good()
@@ -271,7 +305,7 @@ class Simulation:
             if checkpoint is not None and checkpoint_every and self.step - last_ckpt >= checkpoint_every:
                 self.save_checkpoint(checkpoint)
                 last_ckpt = self.step
-        self._store_records(rec_count, rec_step, rec_wall, rec_wallpos, rec_track, rec_energy)
+        self._store_records(rec_count, rec)
         if checkpoint is not None:
             self.save_checkpoint(checkpoint)
         return self
@@ -280,7 +314,7 @@ class Simulation:
         """Servo targets F_A in effect at the current step (Servo.schedule)."""
         for w, wall in enumerate(self.scene.walls):
             if wall.servo is not None:
-                self.servo_F[w] = wall.servo.force_at(self.step)
+                self.loading.servo_F[w] = wall.servo.force_at(self.step)
 
     def _fluid_update(self):
         """Solve the fluid at the current state (positions x_i, velocities v_{i-1/2}: the half-step
@@ -291,15 +325,15 @@ class Simulation:
         if not f.setup.moments:
             out[:, 2] = 0.0
         out[:, :2] += self._buoyancy
-        self._ext[:] = out
+        self.external_force[:] = out
         k = f.stable_stride(self)
         f.strides.append((self.step, k))
         self._next_solve = self.step + k
 
-    def _store_records(self, q, rec_step, rec_wall, rec_wallpos, rec_track, rec_energy):
+    def _store_records(self, q, rec):
         if q:
-            self.records.append((rec_step[:q].copy(), rec_wall[:q].copy(), rec_wallpos[:q].copy(),
-                                  rec_track[:q].copy(), rec_energy[:q].copy()))
+            self.records.append((rec.step[:q].copy(), rec.wall[:q].copy(), rec.wallpos[:q].copy(),
+                                 rec.track[:q].copy(), rec.energy[:q].copy()))
 
     # ------------------------------------------------------------------ snapshots
     def contact_table_arrays(self):
@@ -308,14 +342,14 @@ class Simulation:
         Returns a dict of arrays for pairs in contact: finder, other, px, py, nx, ny
         (ε, from finder to other), fn, fs, sliding, overlap.
         """
-        hist = self.hist.copy()
-        m = self.finder.shape[0]
-        fx, fy, mi, mj, fn, fs, ovl, cpx, cpy = (np.zeros(m) for _ in range(9))
-        slide = np.zeros(m, np.int8)
-        contact_forces(self.finder, self.other, hist, self.x, self.y, self.r, self.vx, self.vy, self.om,
-                       self.mat, self.n, self.wpx, self.wpy, self.wex, self.wey, self.wh1, self.wh2,
-                       self.wvx, self.wvy, self.wom, self.wcx, self.wcy, self.wmat,
-                       *self._law_args(), fx, fy, mi, mj, fn, fs, slide, ovl, cpx, cpy, np.inf)
+        pr = self.pairs
+        m = pr.finder.shape[0]
+        P = np.zeros((self.n, 8))
+        pack_discs(self.discs, P)
+        out = pair_outputs(m)
+        pair_forces(pr.finder, pr.other, pr.hist.copy(), pr.sx, pr.sy, P, self.n, self.walls, self.law_params,
+                    self.box, self.dt, np.zeros((m, 3)), True, *out, np.inf)
+        fn, fs, slide, ovl, cpx, cpy = out
         on = ovl > 0
         i, j = self.finder[on], self.other[on]
         px, py = cpx[on], cpy[on]
@@ -350,16 +384,37 @@ class Simulation:
         return Results.from_simulation(self)
 
     # ------------------------------------------------------------------ state I/O
+    def _state_arrays(self) -> dict:
+        """The dynamic state by name (the arrays themselves, not copies)."""
+        out = {k: getattr(self.discs, k) for k in _DISC_STATE}
+        out.update({k: getattr(self.walls, f) for k, f in _WALL_STATE.items()})
+        out.update({k: getattr(self.pairs, k) for k in _PAIR_STATE})
+        if isinstance(self.box, PeriodicBox):
+            out.update(ix=self.ix, iy=self.iy)
+        return out
+
+    def _set_state(self, s: dict) -> None:
+        """Take over the state ``s`` (arrays by name, as :meth:`_state_arrays`) and rebuild the pair list."""
+        for k in _DISC_STATE:
+            getattr(self.discs, k)[:] = s[k]
+        for k, f in _WALL_STATE.items():
+            getattr(self.walls, f)[:] = s[k]
+        if "ix" in s:
+            self.ix[:] = s["ix"]
+            self.iy[:] = s["iy"]
+        self.pairs = empty_pairs(s["hist"].shape[1])._replace(
+            finder=np.array(s["finder"], np.int64), other=np.array(s["other"], np.int64),
+            hist=np.array(s["hist"], np.float64))
+        self.rebuild()
+
     def _copy_state(self):
-        return {k: getattr(self, k).copy() for k in _STATE} | {"step": self.step}
+        return {k: v.copy() for k, v in self._state_arrays().items()} | {"step": self.step}
 
     def _restore_state(self, s):
-        for k in _STATE:
-            setattr(self, k, s[k].copy())
         self.step = s["step"]
         if self.fluid is not None:
             self._next_solve = max(self.step, self.fluid.setup.start)
-        self.rebuild()
+        self._set_state(s)
 
     def _save_last_good(self):
         out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
@@ -371,7 +426,7 @@ class Simulation:
         """Write the dynamic state to ``path`` (.npz) atomically (temp file + rename)."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        data = {k: getattr(self, k) for k in _STATE}
+        data = self._state_arrays()
         meta = dict(scene=self.scene.name, step=self.step, n=self.n, nw=self.nw, dt=self.dt)
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
         os.close(fd)
@@ -391,21 +446,16 @@ class Simulation:
                 f"continue_from: scene {other.scene.name!r} has {other.n} discs and {other.nw} walls, "
                 f"{self.scene.name!r} has {self.n} and {self.nw} (or the radii differ); a staged protocol "
                 "needs the same discs and walls in every stage")
-        for k in _STATE:
-            if k == "hist":
-                continue
-            setattr(self, k, getattr(other, k).copy())
-        h = np.zeros((other.hist.shape[0], self.n_hist))
-        c = min(self.n_hist, other.hist.shape[1])
-        h[:, :c] = other.hist[:, :c]  # a stage without shear springs keeps only the normal column
-        self.hist = h
+        state = other._state_arrays()
+        # a stage with another law or history width keeps what the law carries over (demflow.laws.base)
+        state["hist"] = self.law.continue_from(other.pairs.hist, self.n_hist)
         # the discs' forces on the walls as the other stage left them: a saturated stage's first solve
         # hands F_A − F_C to the fluid (thesis §5.3.2) before its first step computes them again
-        self.wall_force[:] = other.wall_force
         self.step = 0
         if self.fluid is not None:
             self._next_solve = self.fluid.setup.start
-        self.rebuild()
+        self._set_state(state)
+        self.walls.force[:] = other.walls.force
         return self
 
     def load_checkpoint(self, path: str | os.PathLike) -> "Simulation":
@@ -417,10 +467,9 @@ class Simulation:
                     f"checkpoint {path} is for scene {meta['scene']!r} with {meta['n']} discs and "
                     f"{meta['nw']} walls, not {self.scene.name!r} ({self.n}, {self.nw}); build the same scene"
                 )
-            for k in _STATE:
-                setattr(self, k, z[k].copy())
+            state = {k: z[k].copy() for k in z.files if k != "meta"}
             self.step = int(meta["step"])
         if self.fluid is not None:
             self._next_solve = max(self.step, self.fluid.setup.start)
-        self.rebuild()
+        self._set_state(state)
         return self

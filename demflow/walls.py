@@ -32,44 +32,44 @@ def servo_wall_velocity(force_on_wall_x, force_on_wall_y, F_A, dx, dy, gain, v_m
 
 
 @njit
-def set_wall_velocities(step, wall_force, wpx, wpy, wvx, wvy, wom, wcx, wcy,
-                        phase_start, phase_end, phase_vx, phase_vy, phase_om,
-                        phase_cx, phase_cy, phase_about_p,
-                        servo_on, servo_start, servo_F, servo_dx, servo_dy, servo_G, servo_vmax):
-    """Choose each wall's velocity for the move from step ``step`` to ``step + 1``."""
-    nw = wpx.shape[0]
+def set_wall_velocities(step, walls, ld):
+    """Choose each wall's velocity for the move from step ``step`` to ``step + 1``
+    (``walls``: :class:`~demflow.state.Walls`, ``ld``: :class:`~demflow.state.Loading`)."""
+    nw = walls.px.shape[0]
     for w in range(nw):
         vx = 0.0
         vy = 0.0
         om = 0.0
-        cx = wpx[w]
-        cy = wpy[w]
-        if servo_on[w] and step >= servo_start[w]:
-            v = servo_wall_velocity(wall_force[w, 0], wall_force[w, 1], servo_F[w],
-                                    servo_dx[w], servo_dy[w], servo_G[w], servo_vmax[w])
-            vx = v * servo_dx[w]
-            vy = v * servo_dy[w]
+        cx = walls.px[w]
+        cy = walls.py[w]
+        if ld.servo_on[w] and step >= ld.servo_start[w]:
+            v = servo_wall_velocity(walls.force[w, 0], walls.force[w, 1], ld.servo_F[w],
+                                    ld.servo_dx[w], ld.servo_dy[w], ld.servo_G[w], ld.servo_vmax[w])
+            vx = v * ld.servo_dx[w]
+            vy = v * ld.servo_dy[w]
         else:
-            for k in range(phase_start.shape[1]):
-                if phase_start[w, k] <= step < phase_end[w, k]:
-                    vx = phase_vx[w, k]
-                    vy = phase_vy[w, k]
-                    om = phase_om[w, k]
-                    if not phase_about_p[w, k]:
-                        cx = phase_cx[w, k]
-                        cy = phase_cy[w, k]
+            for k in range(ld.phase_start.shape[1]):
+                if ld.phase_start[w, k] <= step < ld.phase_end[w, k]:
+                    vx = ld.phase_vx[w, k]
+                    vy = ld.phase_vy[w, k]
+                    om = ld.phase_om[w, k]
+                    if not ld.phase_about_p[w, k]:
+                        cx = ld.phase_cx[w, k]
+                        cy = ld.phase_cy[w, k]
                     break
-        wvx[w] = vx
-        wvy[w] = vy
-        wom[w] = om
-        wcx[w] = cx
-        wcy[w] = cy
+        walls.vx[w] = vx
+        walls.vy[w] = vy
+        walls.om[w] = om
+        walls.cx[w] = cx
+        walls.cy[w] = cy
 
 
 @njit
-def move_walls(wpx, wpy, wex, wey, wh1, wh2, wvx, wvy, wom, wcx, wcy, dt):
+def move_walls(walls, dt):
     """Move every wall by one step: rotate P and e by ωΔt about the pivot, then translate
     P and the pivot by vΔt.  Returns the largest displacement of any wall point [length]."""
+    wpx, wpy, wex, wey = walls.px, walls.py, walls.ex, walls.ey
+    wcx, wcy, wvx, wvy, wom = walls.cx, walls.cy, walls.vx, walls.vy, walls.om
     dmax = 0.0
     for w in range(wpx.shape[0]):
         a = wom[w] * dt
@@ -90,10 +90,30 @@ def move_walls(wpx, wpy, wex, wey, wh1, wh2, wvx, wvy, wom, wcx, wcy, dt):
         wcy[w] += wvy[w] * dt
         # farthest wall point from the pivot bounds the rotational displacement
         reach = 0.0
-        for h in (wh1[w], wh2[w]):
+        for h in (walls.h1[w], walls.h2[w]):
             qx = wpx[w] + h * wex[w] - wcx[w]
             qy = wpy[w] + h * wey[w] - wcy[w]
             reach = max(reach, np.sqrt(qx * qx + qy * qy))
         d = np.sqrt(wvx[w] ** 2 + wvy[w] ** 2) * dt + abs(a) * reach
         dmax = max(dmax, d)
     return dmax
+
+
+def prescribed_wall_points(walls, loading, dt, steps):
+    """Each wall's reference point P after each step in ``steps`` (int), moving the walls of a built,
+    un-run simulation by their phases only (servo control off) on a copy [length]; (len(steps), nw, 2)."""
+    w = walls._replace(**{k: np.array(getattr(walls, k), dtype=np.float64) for k in
+                          ("px", "py", "ex", "ey", "vx", "vy", "om", "cx", "cy")})
+    w = w._replace(force=np.zeros_like(walls.force), cx=w.px.copy(), cy=w.py.copy(),
+                   vx=np.zeros_like(w.vx), vy=np.zeros_like(w.vy), om=np.zeros_like(w.om))
+    ld = loading._replace(servo_on=np.zeros_like(loading.servo_on))
+    out = np.zeros((len(steps), w.px.shape[0], 2))
+    want = {int(st): q for q, st in enumerate(steps)}
+    last = int(max(steps)) if len(steps) else 0
+    for st in range(last + 1):
+        if st in want:
+            out[want[st], :, 0] = w.px
+            out[want[st], :, 1] = w.py
+        set_wall_velocities(st, w, ld)
+        move_walls(w, dt)
+    return out

@@ -29,7 +29,7 @@ def scene(fluid=None, x=(0.0,), y=(0.0,), r=(0.5,), v=None, w=5.0, h=10.0, g=(0.
 
 def test_dry_scene_builds_nothing_fluid():
     sim = build(scene())
-    assert sim.fluid is None and not sim._has_ext and sim._ext.size == 0
+    assert sim.fluid is None and not sim.has_external_force and sim.external_force.size == 0
     res = sim.run(5).results()
     assert len(res.fluid_forces) == 0 and len(res.pore_pressure) == 0 and "fluid_solves" not in res.meta
 
@@ -104,8 +104,8 @@ def test_buoyancy_is_minus_rho_l_a_g():
     """Eq 4.39: at rest the fluid drag is zero and the external force is the buoyancy ρ_l π R² |g| upwards."""
     sim = build(scene(Fluid(viscosity=10.0, density=1.3, adaptive=False), r=(0.5,)))
     sim.run(1)
-    assert abs(sim._ext[0, 0]) < 1e-9
-    assert math.isclose(sim._ext[0, 1], 1.3 * math.pi * 0.25 * 980.0, rel_tol=1e-12)
+    assert abs(sim.external_force[0, 0]) < 1e-9
+    assert math.isclose(sim.external_force[0, 1], 1.3 * math.pi * 0.25 * 980.0, rel_tol=1e-12)
     # a disc lighter than the fluid rises
     sc = scene(Fluid(viscosity=1.0, density=3.0, adaptive=False))
     sim = build(sc)

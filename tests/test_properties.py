@@ -49,8 +49,8 @@ def test_newton_third_law_frictional(seed):
     p1 = np.array([np.sum(sim.mass * sim.vx), np.sum(sim.mass * sim.vy)])
     scale = np.sum(sim.mass * np.hypot(sim.vx, sim.vy)) + 1.0
     assert np.all(np.abs(p1 - p0) < 1e-11 * scale)
-    assert np.abs(sim._Fx.sum()) < 1e-9 * (np.abs(sim._Fx).sum() + 1)
-    assert np.abs(sim._Fy.sum()) < 1e-9 * (np.abs(sim._Fy).sum() + 1)
+    assert np.abs(sim.discs.Fx.sum()) < 1e-9 * (np.abs(sim.discs.Fx).sum() + 1)
+    assert np.abs(sim.discs.Fy.sum()) < 1e-9 * (np.abs(sim.discs.Fy).sum() + 1)
 
 
 def _final(x, y, r, v, om, **kw):

@@ -45,4 +45,4 @@ def test_fluid_start_runs_dry_until_the_liquid_is_added():
     assert wet.fluid.strides[0][0] == 400  # the first solve is at the start step
     part = build(slope_scene(fluid=fluid, friction=0.0)).run(400)
     assert np.array_equal(part.x, dry.x) and np.array_equal(part.vx, dry.vx)  # dry up to the start
-    assert np.abs(wet._ext).max() > 0
+    assert np.abs(wet.external_force).max() > 0

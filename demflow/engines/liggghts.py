@@ -350,22 +350,6 @@ def _read_local(path: Path, ncol: int, atoms: bool = False) -> dict:
 
 def _wall_p_history(sim, steps):
     """Each wall's reference point P after each step in ``steps`` (demflow's kinematics)."""
-    from ..walls import move_walls, set_wall_velocities
+    from ..walls import prescribed_wall_points
 
-    s = sim
-    wpx, wpy, wex, wey = (np.array(a, dtype=np.float64) for a in (s.wpx, s.wpy, s.wex, s.wey))  # sim is un-run
-    wvx, wvy, wom = np.zeros(s.nw), np.zeros(s.nw), np.zeros(s.nw)
-    wcx, wcy = wpx.copy(), wpy.copy()
-    out = np.zeros((len(steps), s.nw, 2))
-    want = {int(st): q for q, st in enumerate(steps)}
-    last = int(max(steps)) if len(steps) else 0
-    for st in range(last + 1):
-        if st in want:
-            out[want[st], :, 0] = wpx
-            out[want[st], :, 1] = wpy
-        set_wall_velocities(st, np.zeros((s.nw, 3)), wpx, wpy, wvx, wvy, wom, wcx, wcy, s.phase_start, s.phase_end,
-                            s.phase_vx, s.phase_vy, s.phase_om, s.phase_cx, s.phase_cy, s.phase_about_p,
-                            np.zeros(s.nw, np.int8), s.servo_start, s.servo_F, s.servo_dx, s.servo_dy, s.servo_G,
-                            s.servo_vmax)
-        move_walls(wpx, wpy, wex, wey, s.wh1, s.wh2, wvx, wvy, wom, wcx, wcy, s.dt)
-    return out
+    return prescribed_wall_points(sim.walls, sim.loading, sim.dt, steps)

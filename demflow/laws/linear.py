@@ -9,9 +9,13 @@ both discs receive the moment +(S + D_S)·R (eq 2.20).
 """
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
+from numba.extending import overload
 
 from ..jit import njit
+from .base import LawFamily, is_params_of, law_energy_add, law_force, law_separate
 
 NORMAL_INCREMENTAL = 0  # N += kN ṅ Δt (thesis eqs 2.11, 2.13, 2.15)
 NORMAL_OVERLAP = 1  # N = kN δ (YADE / LIGGGHTS)
@@ -58,3 +62,112 @@ def linear_contact(overlap, ndot, sdot, n_old, s_old, dt, kn, ks, cn, cs, mu, co
                 sliding = True
         Fs = S + Ds
     return N, S, Fn, Fs, sliding
+
+
+# ---------------------------------------------------------------------------- the law interface
+LinearParams = namedtuple("LinearParams", [
+    "kn", "ks",   # (nm, nm) normal and shear spring stiffness per material pair [force/length]
+    "cn", "cs",   # (nm, nm) normal and shear dashpots [force·time/length]
+    "mu", "coh",  # (nm, nm) Coulomb coefficient tan φ_μ and cohesion c [force]
+    "normal_mode", "sliding_mode",  # NORMAL_* and SLIDING_* (scene-wide, ContactModel)
+    "has_shear",  # bool: some law has a shear spring (history has a shear column)
+])
+"""Parameters of the linear law as the compiled cycle sees them (see :mod:`demflow.laws.base`)."""
+
+TABLE_KEYS = ("kn", "ks", "cn", "cs", "mu", "coh")
+
+
+@overload(law_force, inline="always")
+def _linear_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
+    if not is_params_of(law, LinearParams):
+        return None
+
+    def impl(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
+        has_shear = law.has_shear
+        s_old = hist[k, 1] if has_shear else 0.0
+        N, S, Fn, Fs, sliding = linear_contact(
+            overlap, ndot, sdot, hist[k, 0], s_old, dt,
+            law.kn[ma, mb], law.ks[ma, mb], law.cn[ma, mb], law.cs[ma, mb], law.mu[ma, mb], law.coh[ma, mb],
+            law.normal_mode, law.sliding_mode, has_shear)
+        hist[k, 0] = N
+        if has_shear:
+            hist[k, 1] = S
+        return Fn, Fs, sliding
+    return impl
+
+
+@overload(law_separate, inline="always")
+def _linear_separate(law, hist, k):
+    if not is_params_of(law, LinearParams):
+        return None
+
+    def impl(law, hist, k):
+        hist[k, 0] = 0.0
+        if law.has_shear:
+            hist[k, 1] = 0.0
+    return impl
+
+
+@overload(law_energy_add, inline="always")
+def _linear_energy(law, e, hist, k, ma, mb):
+    if not is_params_of(law, LinearParams):
+        return None
+
+    def impl(law, e, hist, k, ma, mb):
+        # N²/2kN + S²/2kS [force·length], added term by term (the order of the reference sum)
+        e += 0.5 * hist[k, 0] ** 2 / law.kn[ma, mb]
+        if law.has_shear and law.ks[ma, mb] > 0.0:
+            e += 0.5 * hist[k, 1] ** 2 / law.ks[ma, mb]
+        return e
+    return impl
+
+
+class Linear(LawFamily):
+    """The linear spring-dashpot-Coulomb law (this module) as a law family.
+
+    History per contact: the normal spring force N and, when some law has a shear spring, the
+    shear spring force S (2D: one column each; the shear history is a scalar in the contact's
+    tangent τ).  Stiffness bound: max(kN, kS) (thesis §2.2.4.4).
+    """
+
+    name = "linear"
+    engines = {
+        "yade": "FrictMat + Ip2_FrictMat_FrictMat_FrictPhys + Law2_ScGeom_FrictPhys_CundallStrack "
+                "(normal='overlap', sliding='cs')",
+        "liggghts": "pair gran model hooke/stiffness tangential history (normal='overlap', sliding='cs')",
+    }
+
+    @classmethod
+    def accepts(cls, law) -> bool:
+        from ..scene import LinearLaw
+
+        return isinstance(law, LinearLaw)
+
+    def __init__(self, scene, laws_by_pair, material_index):
+        super().__init__(scene, laws_by_pair, material_index)
+        self.has_shear = bool(any(law.ks > 0 for law in laws_by_pair.values()))
+
+    def history_width(self, dim: int = 2) -> int:
+        return 2 if self.has_shear else 1
+
+    def tables(self) -> dict:
+        """The (nm × nm) tables kn, ks, cn, cs, mu, coh (zero for pairs that never meet)."""
+        nm = len(self.material_index)
+        t = {key: np.zeros((nm, nm)) for key in TABLE_KEYS}
+        for (a, b), law in self.laws_by_pair.items():
+            ia, ib = self.material_index[a], self.material_index[b]
+            for key in TABLE_KEYS:
+                val = {"mu": law.friction, "coh": law.cohesion}.get(key, getattr(law, key, None))
+                t[key][ia, ib] = val
+                t[key][ib, ia] = val
+        return t
+
+    def params(self) -> LinearParams:
+        cm = self.scene.contact_model
+        t = self.tables()
+        return LinearParams(**t, normal_mode=NORMAL_INCREMENTAL if cm.normal == "incremental" else NORMAL_OVERLAP,
+                            sliding_mode=SLIDING_CS if cm.sliding == "cs" else SLIDING_THESIS,
+                            has_shear=self.has_shear)
+
+    def stiffness_bound(self, law) -> float:
+        return max(law.kn, law.ks)

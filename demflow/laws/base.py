@@ -1,0 +1,90 @@
+"""The contact-law interface: what a law declares, and the compiled calls every pair pass makes.
+
+A law family (linear, Hertz-Mindlin, ...) has two halves.
+
+*Python side* — a :class:`LawFamily` subclass, one instance per built scene:
+
+- ``accepts(law)``: whether it implements a scene's law declaration (e.g. :class:`demflow.scene.LinearLaw`);
+- ``params(...)``: its parameters per material pair, checked (clear errors), as a namedtuple of
+  (n_materials × n_materials) tables plus mode flags — the only thing that enters a kernel;
+- ``history_width(dim)``: the per-contact history columns it keeps in ``dim`` dimensions;
+- ``stiffness_bound(law)``: the largest contact stiffness [force/length] of one declared law, for
+  the critical time step;
+- ``elastic_energy``: compiled, see :func:`law_energy_add`;
+- ``continue_from(hist, width)``: how history written by another stage (possibly another law or
+  width) carries over;
+- ``engines``: how YADE and LIGGGHTS express it (or that they cannot), for the capabilities table.
+
+*Compiled side* — implementations of the generic functions below, registered with
+:func:`numba.extending.overload` for the law's params type.  Numba picks the implementation from
+the *type* of the params tuple when the cycle is compiled, so a law costs no per-pair branch and
+the kernels keep Numba's on-disk cache (measured: ``benchmarks/results/law_dispatch.md``).  Each is
+inlined into the pair pass and is a pure function of scalars and the contact's history row.
+
+- ``law_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt) -> (Fn, Fs, sliding)``: advance
+  contact k's history row by one step and return its total normal and shear force;
+- ``law_separate(law, hist, k)``: the pair is apart: clear its history;
+- ``law_energy_add(law, e, hist, k, ma, mb) -> e``: add the energy stored in contact k's springs.
+
+To add a law: a module in ``demflow/laws/`` with its scene declaration, its params namedtuple, a
+``LawFamily`` subclass and the three overloads; list the family in :data:`FAMILIES`
+(``demflow/laws/__init__.py``); its tests are the law-interface class in ``tests/test_laws.py``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def law_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
+    """Advance contact k by one step; returns (Fn, Fs, sliding).  Compiled per law (overload)."""
+    raise NotImplementedError(f"no compiled law for parameters of type {type(law).__name__}")
+
+
+def law_separate(law, hist, k):
+    """Contact k is apart: clear its history.  Compiled per law (overload)."""
+    raise NotImplementedError(f"no compiled law for parameters of type {type(law).__name__}")
+
+
+def law_energy_add(law, e, hist, k, ma, mb):
+    """e plus the elastic energy of contact k [force·length].  Compiled per law (overload)."""
+    raise NotImplementedError(f"no compiled law for parameters of type {type(law).__name__}")
+
+
+def is_params_of(numba_type, cls) -> bool:
+    """True when ``numba_type`` is the Numba type of a ``cls`` namedtuple (for overload selection)."""
+    return getattr(numba_type, "instance_class", None) is cls
+
+
+class LawFamily:
+    """Python side of a contact-law family (see the module docstring)."""
+
+    name: str = ""
+    # engine -> how the engine expresses this law ("" when it cannot)
+    engines: dict = {}
+
+    def __init__(self, scene, laws_by_pair, material_index):
+        self.scene = scene
+        self.laws_by_pair = laws_by_pair  # {(material a, material b): declared law}
+        self.material_index = material_index
+
+    @classmethod
+    def accepts(cls, law) -> bool:
+        """True when this family implements the declared scene law ``law``."""
+        raise NotImplementedError
+
+    def history_width(self, dim: int) -> int:
+        raise NotImplementedError
+
+    def params(self):
+        raise NotImplementedError
+
+    def stiffness_bound(self, law) -> float:
+        raise NotImplementedError
+
+    def continue_from(self, hist: np.ndarray, width: int) -> np.ndarray:
+        """History of another stage's contacts (key order) as this law's: the common leading columns
+        are kept, the rest start at zero (a stage without shear springs keeps only the normal column)."""
+        out = np.zeros((hist.shape[0], width))
+        c = min(width, hist.shape[1])
+        out[:, :c] = hist[:, :c]
+        return out
