@@ -86,6 +86,36 @@ def elastic_energy_perm(pairs, mat, wmat, n, law):
 
 
 @njit
+def _gather(src, dst, perm):
+    """dst[p] = src[perm[p]]: disc order to slot order."""
+    for p in range(perm.shape[0]):
+        dst[p] = src[perm[p]]
+
+
+@njit
+def _scatter(src, dst, perm):
+    """dst[perm[p]] = src[p]: slot order to disc order."""
+    for p in range(perm.shape[0]):
+        dst[perm[p]] = src[p]
+
+
+@njit
+def _rows_to(src, dst, pos):
+    """dst[pos[k]] = src[k] for every row k (key order to internal order)."""
+    for k in range(pos.shape[0]):
+        for c in range(src.shape[1]):
+            dst[pos[k], c] = src[k, c]
+
+
+@njit
+def _rows_from(src, dst, pos):
+    """dst[k] = src[pos[k]] for every row k (internal order to key order)."""
+    for k in range(pos.shape[0]):
+        for c in range(src.shape[1]):
+            dst[k, c] = src[pos[k], c]
+
+
+@njit
 def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
               rec, rec_count, ext, has_ext):
     """Run up to n steps from step ``step0``.
@@ -110,45 +140,21 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
     disc's force sums at every step (the fluid force of a saturated scene, held between fluid
     solves); a dry scene passes has_ext=False and the cycle is unchanged.
     """
-    nd = pub.x.shape[0]
-    m = pairs.finder.shape[0]
-    nh = pairs.hist.shape[1]
     perm = lay.perm
-    for p in range(nd):
-        i = perm[p]
-        slots.x[p] = pub.x[i]
-        slots.y[p] = pub.y[i]
-        slots.th[p] = pub.th[i]
-        slots.vx[p] = pub.vx[i]
-        slots.vy[p] = pub.vy[i]
-        slots.om[p] = pub.om[i]
-        slots.xref[p] = pub.xref[i]
-        slots.yref[p] = pub.yref[i]
-        slots.r[p] = pub.r[i]
-        slots.mass[p] = pub.mass[i]
-        slots.inertia[p] = pub.inertia[i]
-        slots.C[p] = pub.C[i]
-        slots.Cr[p] = pub.Cr[i]
-        slots.mat[p] = pub.mat[i]
-    for k in range(m):
-        for c in range(nh):
-            pairs.hist_p[pairs.pos[k], c] = pairs.hist[k, c]
+    for src, dst in ((pub.x, slots.x), (pub.y, slots.y), (pub.th, slots.th), (pub.vx, slots.vx),
+                     (pub.vy, slots.vy), (pub.om, slots.om), (pub.xref, slots.xref), (pub.yref, slots.yref),
+                     (pub.r, slots.r), (pub.mass, slots.mass), (pub.inertia, slots.inertia), (pub.C, slots.C),
+                     (pub.Cr, slots.Cr)):
+        _gather(src, dst, perm)
+    _gather(pub.mat, slots.mat, perm)
+    _rows_to(pairs.hist, pairs.hist_p, pairs.pos)
     done, status, disp_walls, rec_count = _cycle(n, step0, skin, disp_walls, pub.mat, slots, lay, pairs, walls,
                                                  loading, law, box, dt, gx, gy, rec, rec_count, ext, has_ext)
-    for p in range(nd):
-        i = perm[p]
-        pub.x[i] = slots.x[p]
-        pub.y[i] = slots.y[p]
-        pub.th[i] = slots.th[p]
-        pub.vx[i] = slots.vx[p]
-        pub.vy[i] = slots.vy[p]
-        pub.om[i] = slots.om[p]
-        pub.Fx[i] = slots.Fx[p]
-        pub.Fy[i] = slots.Fy[p]
-        pub.M[i] = slots.M[p]
-    for k in range(m):
-        for c in range(nh):
-            pairs.hist[k, c] = pairs.hist_p[pairs.pos[k], c]
+    for src, dst in ((slots.x, pub.x), (slots.y, pub.y), (slots.th, pub.th), (slots.vx, pub.vx),
+                     (slots.vy, pub.vy), (slots.om, pub.om), (slots.Fx, pub.Fx), (slots.Fy, pub.Fy),
+                     (slots.M, pub.M)):
+        _scatter(src, dst, perm)
+    _rows_from(pairs.hist_p, pairs.hist, pairs.pos)
     return done, status, disp_walls, rec_count
 
 

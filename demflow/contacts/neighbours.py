@@ -21,14 +21,9 @@ from __future__ import annotations
 
 import numpy as np
 
-import numba
 from numba import prange
 
-from ..jit import JIT_FLAGS, njit, njit_parallel
-
-# per-disc helpers that take arrays are inlined at the Numba IR level: a compiled call
-# with array arguments updates reference counts (atomic, serialising threads) per call
-njit_inline = numba.njit(inline="always", **JIT_FLAGS)
+from ..jit import njit, njit_inline, njit_parallel
 
 
 @njit
@@ -223,11 +218,23 @@ def pairs_cell_search(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
 @njit
 def pairs_brute_force(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
     """The O(N²) reference for :func:`pairs_cell_search` (same keys, same order)."""
+    finder, other, _, _ = pairs_brute_force_images(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by,
+                                                   False, False, 1.0, 1.0)
+    return finder, other
+
+
+@njit
+def pairs_brute_force_images(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, periodic_x, periodic_y, lx, ly):
+    """Every pair by the O(N²) search, by the minimum-image distance along the periodic axes (period
+    lx, ly [length]); returns (finder, other, sx, sy), (sx, sy) the image shift of the other disc.
+    The reference for :func:`pairs_cell_search` and :func:`demflow.contacts.periodic.pairs_periodic`."""
     n = x.shape[0]
     nw = wall_ax.shape[0]
     cap = n * (n - 1) // 2 + n * nw
     finder = np.empty(cap, np.int64)
     other = np.empty(cap, np.int64)
+    sxo = np.zeros(cap)
+    syo = np.zeros(cap)
     m = 0
     for i in range(n):
         for j in range(n):
@@ -235,10 +242,16 @@ def pairs_brute_force(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
                 continue
             dx = x[j] - x[i]
             dy = y[j] - y[i]
+            sx = -lx * np.round(dx / lx) if periodic_x else 0.0
+            sy = -ly * np.round(dy / ly) if periodic_y else 0.0
+            dx += sx
+            dy += sy
             lim = r[i] + r[j] + skin
             if dx * dx + dy * dy < lim * lim:
                 finder[m] = i
                 other[m] = j
+                sxo[m] = sx
+                syo[m] = sy
                 m += 1
         for w in range(nw):
             qx, qy, d = point_segment_distance(x[i], y[i], wall_ax[w], wall_ay[w], wall_bx[w], wall_by[w])
@@ -246,7 +259,7 @@ def pairs_brute_force(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
                 finder[m] = i
                 other[m] = n + w
                 m += 1
-    return finder[:m].copy(), other[:m].copy()
+    return finder[:m].copy(), other[:m].copy(), sxo[:m].copy(), syo[:m].copy()
 
 
 @njit

@@ -18,8 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..jit import njit
-from .neighbours import _finds, pairs_cell_search, point_segment_distance
+from .neighbours import pairs_brute_force_images, pairs_cell_search
 
 
 def reach(r: np.ndarray, skin: float) -> float:
@@ -95,40 +94,7 @@ def pairs_periodic(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, box):
     return fe[order], other[order], sx[order], sy[order]
 
 
-@njit
-def pairs_periodic_brute_force(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, periodic_x, periodic_y, lx, ly):
+def pairs_periodic_brute_force(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, box):
     """The O(N²) reference for :func:`pairs_periodic`: every pair by the minimum-image distance."""
-    n = x.shape[0]
-    nw = wall_ax.shape[0]
-    cap = n * (n - 1) // 2 + n * nw
-    finder = np.empty(cap, np.int64)
-    other = np.empty(cap, np.int64)
-    sxo = np.empty(cap)
-    syo = np.empty(cap)
-    m = 0
-    for i in range(n):
-        for j in range(n):
-            if j == i or not _finds(i, j, r):
-                continue
-            dx = x[j] - x[i]
-            dy = y[j] - y[i]
-            sx = -lx * np.round(dx / lx) if periodic_x else 0.0
-            sy = -ly * np.round(dy / ly) if periodic_y else 0.0
-            dx += sx
-            dy += sy
-            lim = r[i] + r[j] + skin
-            if dx * dx + dy * dy < lim * lim:
-                finder[m] = i
-                other[m] = j
-                sxo[m] = sx
-                syo[m] = sy
-                m += 1
-        for w in range(nw):
-            qx, qy, d = point_segment_distance(x[i], y[i], wall_ax[w], wall_ay[w], wall_bx[w], wall_by[w])
-            if d < r[i] + skin:
-                finder[m] = i
-                other[m] = n + w
-                sxo[m] = 0.0
-                syo[m] = 0.0
-                m += 1
-    return finder[:m].copy(), other[:m].copy(), sxo[:m].copy(), syo[:m].copy()
+    return pairs_brute_force_images(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, box.periodic_x,
+                                    box.periodic_y, box.lx, box.ly)
