@@ -118,3 +118,20 @@ def test_unknown_schema_version_is_refused(tmp_path):
     res.save(tmp_path / "new")
     with pytest.raises(schema.SchemaError, match="schema_version=99.*upgrade demflow"):
         Results.load(tmp_path / "new")
+
+
+def test_engine_reader_tables_are_v2():
+    """results_from_records (where the YADE and LIGGGHTS readers end) builds v2 tables."""
+    from demflow.engines.tables import results_from_records
+
+    sim = build(_disc_on_floor(1, steps=10))
+    steps = np.array([0, 5])
+    res = results_from_records(
+        sim, engine="yade", steps=steps, wall=np.zeros((2, 1, 3)), wallpos=np.zeros((2, 1, 2)),
+        track=np.zeros((2, 0, 2)), kinetic=np.zeros(2),
+        snapshots=[dict(step=5, particles=[[0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]],
+                        contacts=[[0, 1, 0.0, 0.0, 0.0, -1.0, 3.0, 0.5, 1e-4]], walls=[[0.0, 0.0, 1.0, 0.0]])])
+    assert res.meta["schema_version"] == 2 and res.meta["dim"] == 2
+    _assert_schema(res)
+    c = res.contacts.iloc[0]  # n = (0, -1) from the disc to the floor: the floor pushes up, fs along -τ = (1, 0)
+    assert (c.fx, c.fy) == (0.5, 3.0)
