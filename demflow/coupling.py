@@ -356,13 +356,3 @@ class FluidCoupler:
         k = int(st.safety * 2.0 * tau / sim.dt)
         return max(1, min(st.stride, k))
 
-
-def relaxation_time(mass, K):
-    """τ = m/K [time]: e-folding time of a disc's velocity under a drag K (thesis eq 5.3, β = 1/τ)."""
-    return mass / K
-
-
-def fluid_time_step(mass, K, safety=0.5):
-    """Largest fluid update interval kΔt [time] for the lagged explicit drag: safety × 2m/K (stable
-    below 2τ; safety 0.5 keeps the velocity from overshooting)."""
-    return safety * 2.0 * mass / K

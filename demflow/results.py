@@ -7,8 +7,10 @@ Tables (pandas DataFrames, long format, saved as Parquet):
 - ``tracked``: step, time, a, b, fn, fs — total normal and shear force of tracked pairs
 - ``energy``: step, time, kinetic, elastic [force·length]
 - ``particles``: step, time, id, x, y, theta, vx, vy, omega, radius (at snapshots)
-- ``contacts``: step, time, i, j, wall, px, py, nx, ny, fn, fs, sliding, overlap
-  (at snapshots; j = -1 and wall = name for disc-wall contacts; n from i to j/the wall)
+- ``contacts``: step, time, i, j, wall, px, py, nx, ny, fn, fs, sliding, overlap, fx, fy
+  (at snapshots; j = -1 and wall = name for disc-wall contacts; n from i to j/the wall; fn, fs
+  the total normal and shear force [force]; fx, fy the force on i, −fn·n − fs·τ with
+  τ = (n_y, −n_x) [force], schema v2)
 
 Saturated scenes (thesis §3.4) add, at every recorded fluid solve:
 
@@ -18,6 +20,10 @@ Saturated scenes (thesis §3.4) add, at every recorded fluid solve:
 - ``fluid_walls``: step, time, wall, fx, fy — the force of the fluid on each boundary wall
 - ``pore_pressure``: step, time, wall, x, y, s, p — pressure at the BEM nodes along each wall
   (s: distance from the wall's first corner) [force/length²]
+
+``meta`` holds ``schema_version`` (2) and ``dim`` (2).  Columns and dtypes of every table, per
+schema version, are frozen in :mod:`demflow.schema`; :meth:`Results.load` upgrades older tables
+(the stored v1 reference runs) to the current version.
 """
 from __future__ import annotations
 
@@ -30,11 +36,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from . import schema
+
 TABLES = ("wall_forces", "tracked", "energy", "particles", "contacts")
 FLUID_TABLES = ("fluid_forces", "fluid_walls", "pore_pressure")
-_FLUID_COLUMNS = dict(fluid_forces=["step", "time", "id", "fx", "fy", "moment", "vx", "vy", "omega", "x", "y"],
-                      fluid_walls=["step", "time", "wall", "fx", "fy"],
-                      pore_pressure=["step", "time", "wall", "x", "y", "s", "p"])
 
 
 def _atomic_write(path: Path, write):
@@ -61,12 +66,14 @@ class Results:
     contacts: pd.DataFrame
     meta: dict = field(default_factory=dict)
     walls: dict = field(default_factory=dict)  # wall name -> geometry at each snapshot
-    fluid_forces: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=_FLUID_COLUMNS["fluid_forces"]))
-    fluid_walls: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=_FLUID_COLUMNS["fluid_walls"]))
-    pore_pressure: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=_FLUID_COLUMNS["pore_pressure"]))
+    fluid_forces: pd.DataFrame = field(default_factory=lambda: schema.empty("fluid_forces"))
+    fluid_walls: pd.DataFrame = field(default_factory=lambda: schema.empty("fluid_walls"))
+    pore_pressure: pd.DataFrame = field(default_factory=lambda: schema.empty("pore_pressure"))
 
     @classmethod
     def from_simulation(cls, sim) -> "Results":
+        """The tables of a run simulation (schema v2), from its public ``records``, ``snapshots``
+        and attributes only."""
         dt = sim.dt
         wf, tr, en = [], [], []
         for steps, wall, wpos, track, energy in sim.records:
@@ -91,7 +98,6 @@ class Results:
                 sliding=c["sliding"], overlap=c["overlap"])))
             w = s["walls"]
             walls.append(pd.DataFrame(dict(step=s["step"], wall=sim.wall_names, **w)))
-        cat = lambda xs, cols: pd.concat(xs, ignore_index=True) if xs else pd.DataFrame(columns=cols)
         meta = dict(engine="demflow", scene=sim.scene.name, dt=dt, dt_crit=sim.dt_crit, steps=sim.step,
                     n_discs=sim.n, walls=sim.wall_names, rebuilds=sim.rebuilds)
         fluid = {}
@@ -105,23 +111,15 @@ class Results:
                 fw.append(pd.DataFrame(dict(step=step, time=step * dt, wall=fc.names, fx=wfl[:, 0], fy=wfl[:, 1])))
             for step, name, x, y, s_, p in fc.pressure:
                 pp.append(pd.DataFrame(dict(step=step, time=step * dt, wall=name, x=x, y=y, s=s_, p=p)))
-            fluid = dict(fluid_forces=cat(ff, _FLUID_COLUMNS["fluid_forces"]),
-                         fluid_walls=cat(fw, _FLUID_COLUMNS["fluid_walls"]),
-                         pore_pressure=cat(pp, _FLUID_COLUMNS["pore_pressure"]))
+            fluid = dict(fluid_forces=concat(ff, "fluid_forces"), fluid_walls=concat(fw, "fluid_walls"),
+                         pore_pressure=concat(pp, "pore_pressure"))
             ks = [int(k) for _, k in fc.strides] or [0]
             meta.update(fluid_solves=fc.solves, bem_seconds=fc.bem_s, dem_seconds=sim.dem_s,
                         fluid_stride_min=min(ks), fluid_stride_max=max(ks))
-        return cls(
-            wall_forces=cat(wf, ["step", "time", "wall", "fx", "fy", "moment", "px", "py"]),
-            tracked=cat(tr, ["step", "time", "a", "b", "fn", "fs"]),
-            energy=cat(en, ["step", "time", "kinetic", "elastic"]),
-            particles=cat(parts, ["step", "time", "id", "x", "y", "theta", "vx", "vy", "omega", "radius"]),
-            contacts=cat(cons, ["step", "time", "i", "j", "wall", "px", "py", "nx", "ny", "fn", "fs",
-                                "sliding", "overlap"]),
-            meta=meta,
-            walls={"geometry": cat(walls, ["step", "wall", "px", "py", "ex", "ey", "h1", "h2"])},
-            **fluid,
-        )
+        return versioned(cls(wall_forces=concat(wf, "wall_forces"), tracked=concat(tr, "tracked"),
+                             energy=concat(en, "energy"), particles=concat(parts, "particles"),
+                             contacts=concat(cons, "contacts"), meta=meta,
+                             walls={"geometry": concat(walls, "wall_geometry")}, **fluid))
 
     def wall(self, name: str) -> pd.DataFrame:
         """Force history of one wall."""
@@ -150,16 +148,34 @@ class Results:
 
     @classmethod
     def load(cls, out: str | os.PathLike) -> "Results":
+        """Read tables written by :meth:`save` (or a stored reference run), upgraded to the current
+        schema (:func:`demflow.schema.upgrade`: v1 contacts gain fx, fy; meta records
+        ``schema_origin``).  The files are not changed."""
         out = Path(out)
         tables = {name: pd.read_parquet(out / f"{name}.parquet") for name in TABLES}
         tables.update({name: pd.read_parquet(out / f"{name}.parquet") for name in FLUID_TABLES
                        if (out / f"{name}.parquet").exists()})
-        meta = json.loads((out / "meta.json").read_text())
-        walls = {}
         if (out / "wall_geometry.parquet").exists():
-            walls["geometry"] = pd.read_parquet(out / "wall_geometry.parquet")
-        return cls(**tables, meta=meta, walls=walls)
+            tables["wall_geometry"] = pd.read_parquet(out / "wall_geometry.parquet")
+        tables, meta = schema.upgrade(tables, json.loads((out / "meta.json").read_text()))
+        geometry = tables.pop("wall_geometry", None)
+        return cls(**tables, meta=meta, walls={} if geometry is None else {"geometry": geometry})
 
 
 def _body_name(sim, b):
     return f"wall:{sim.wall_names[b - sim.n]}" if b >= sim.n else str(b)
+
+
+def concat(frames: list, table: str) -> pd.DataFrame:
+    """The frames of one table joined (or the empty table), with the current schema's columns and
+    dtypes; contacts gain their force vectors fx, fy (:func:`demflow.schema.with_force_vectors`)."""
+    df = pd.concat(frames, ignore_index=True) if frames else schema.empty(table)
+    if table == "contacts":
+        df = schema.with_force_vectors(df)
+    return schema.conform(df, table)
+
+
+def versioned(res: Results) -> Results:
+    """``res`` with ``schema_version`` and ``dim`` in its meta (tables built by this version)."""
+    res.meta.update(schema_version=schema.SCHEMA_VERSION, dim=schema.DIM)
+    return res

@@ -303,16 +303,6 @@ def mueth_cdf(f, b, beta, a=None):
     return a * (-np.expm1(-beta * f) / beta - b * J)
 
 
-def mueth_sample(n, b, beta, rng=None, fmax=None):
-    """n draws from the normalised Mueth PDF by inverse-CDF interpolation on a fine grid."""
-    rng = np.random.default_rng(rng)
-    fmax = fmax or 60.0 / beta
-    x = np.concatenate([np.linspace(0.0, 8.0, 40001), np.linspace(8.0, max(fmax, 8.0), 20001)[1:]])
-    F = mueth_cdf(x, b, beta)
-    F, keep = np.unique(F, return_index=True)
-    return np.interp(rng.uniform(F[0], F[-1], n), F, x[keep])
-
-
 @dataclass
 class MuethFit:
     """Mueth et al. form (Miyata eq 61) fitted by maximum likelihood, a from the normalisation."""

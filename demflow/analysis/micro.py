@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..schema import contact_force_on_i
 from .forces import snapshot_steps
 
 
@@ -149,9 +150,7 @@ class AverageStress:
 def contact_force_vectors(contacts: pd.DataFrame):
     """Force on disc i [force] of each row: F_i = -(fn n + fs t), t = (ny, -nx); the other
     body gets -F_i."""
-    nx, ny = contacts["nx"].to_numpy(float), contacts["ny"].to_numpy(float)
-    fn, fs = contacts["fn"].to_numpy(float), contacts["fs"].to_numpy(float)
-    return np.column_stack([-(fn * nx + fs * ny), -(fn * ny - fs * nx)])
+    return np.column_stack(contact_force_on_i(contacts["nx"], contacts["ny"], contacts["fn"], contacts["fs"]))
 
 
 def average_stress(data, area, step=None, particles=None, ids=None, include_walls=True,

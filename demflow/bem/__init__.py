@@ -6,9 +6,9 @@
     sol = pb.solve()                  # Table 4.1 quadrature; quad=FINE for near contact
     sol.force("particle"), sol.moment("particle"), sol.interior(points), sol.boundary_pressure()
 
-Modules: ``geometry`` (boundaries, elements, orientation check), ``kernels`` (eqs 4.20-4.21,
-4.94-4.95), ``quadrature`` (Gauss, Table 4.1, logarithmic rule), ``assembly`` (Numba: H, G,
-[A]Y = R, interior sums), ``solve`` (boundary conditions, null space, LU solve, results),
+Modules: ``geometry`` (boundaries, elements, orientation check), ``kernels`` (stress kernels,
+eqs 4.94-4.95), ``quadrature`` (Gauss, Table 4.1, logarithmic rule), ``assembly`` (Numba: H, G
+with u*, t* of eqs 4.20-4.21 inline, [A]Y = R, interior sums), ``solve`` (boundary conditions, null space, LU solve, results),
 ``exact`` (exact Stokes solutions used for validation).
 """
 from .geometry import Boundary, Domain, channel, circle, polygon, rectangle

@@ -1,5 +1,8 @@
 """Fundamental solutions of 2D Stokes flow (thesis §4.3.1, §4.3.6).
 
+u* and t* are evaluated inline in the element integrals of :mod:`demflow.bem.assembly`; this
+module holds the stress kernels D and S of the interior stress (eq 4.93).
+
 Convention (thesis eq 4.22): P is the source (collocation or interior) point, Q the field point
 on the boundary, r_i = x_i(Q) - x_i(P), r = |r|, r̂_i = r_{,i} = r_i / r; n is the unit normal at Q
 pointing out of the fluid.  Units: lengths [m], μ [Pa s].
@@ -14,7 +17,7 @@ so that σ_ij(P) = ∫ D_kij t_k dΓ - ∫ S_kij u_k dΓ (eq 4.93).  The thesis 
 eq 4.95 (and the same slip in its elastic parent, eq 4.91, where the ν'-factor was put on the
 whole bracket; Brebbia's S_kij has 2∂r/∂n[(1-2ν)δ_ij r̂_k + ν(δ_ik r̂_j + δ_jk r̂_i) - 4 r̂_i r̂_j r̂_k],
 which at ν = 1/2 gives -8).  The printed form violates the exact stress of known Stokes flows
-(tests/test_bem_kernels.py); ``printed=True`` reproduces it for that demonstration.
+(tests/test_bem.py); ``printed=True`` reproduces it for that demonstration.
 Eq 4.94 is correct as printed.
 """
 from __future__ import annotations
@@ -26,26 +29,6 @@ import numpy as np
 from ..jit import njit
 
 INV_PI = 1.0 / math.pi
-
-
-@njit
-def velocity_kernel(rx, ry, mu):
-    """u*_11, u*_12, u*_22 (symmetric) of thesis eq 4.20 for r = Q - P."""
-    r = math.hypot(rx, ry)
-    ex, ey = rx / r, ry / r
-    c = 1.0 / (4.0 * math.pi * mu)
-    lg = -math.log(r)
-    return c * (lg + ex * ex), c * ex * ey, c * (lg + ey * ey)
-
-
-@njit
-def traction_kernel(rx, ry, nx, ny):
-    """t*_11, t*_12, t*_22 (symmetric) of thesis eq 4.21 for r = Q - P, normal n at Q."""
-    r = math.hypot(rx, ry)
-    ex, ey = rx / r, ry / r
-    drdn = ex * nx + ey * ny
-    c = -INV_PI * drdn / r
-    return c * ex * ex, c * ex * ey, c * ey * ey
 
 
 @njit

@@ -28,10 +28,6 @@ LABELS = ("v1x", "v1y", "v2x", "v2y")
 T_CONTACT = 0.045
 
 
-def rigid_solution():
-    return RIGID.copy()
-
-
 def soft_contact_solution(kn=1e7, m=np.pi, R=1.0, v0=6.0):
     """Exact post-impact velocities for two discs with contact force kN·(2R - d) along the
     line of centres (the model's own theory), by integrating the relative motion with

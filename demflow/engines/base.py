@@ -48,7 +48,7 @@ class EngineOutputError(EngineError):
 
 
 class EngineUnsupported(EngineError):
-    """The scene uses something this engine cannot express (see the equivalence table)."""
+    """The scene uses something this engine cannot express (see :mod:`demflow.engines.capabilities`)."""
 
 
 def sha256(path: Path) -> str:

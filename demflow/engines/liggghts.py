@@ -1,6 +1,6 @@
 """LIGGGHTS-PUBLIC (Debian package ``liggghts``, 3.8.0): deck writer, runner and reader.
 
-How a demflow scene is expressed (see :mod:`demflow.engines.equivalence`): ``dimension 2``
+How a demflow scene is expressed (see :mod:`demflow.engines.capabilities`): ``dimension 2``
 discs (``set density`` gives the disc mass ρπR² per unit thickness, the integrator the disc
 inertia ½mR²), ``hooke/stiffness`` with ``absolute_damping on`` and ``limitForce on``, per
 type-pair kn, kt, γn, γt, friction (type 1..K discs by material, walls after them); walls as
@@ -8,9 +8,10 @@ two-triangle STL meshes spanning a thick periodic z, moved by ``move/mesh`` with
 that switch velocity by step inside one ``run``.  Forces on walls come from
 ``mesh/surface/stress``; contact forces from ``compute pair/gran/local``.
 
-Not expressed: global damping (refused: LIGGGHTS has no implicit eq 2.27 form here), the
-incremental normal spring (LIGGGHTS computes kN × overlap), cohesion, servo walls.  The deck
-contains numbers and fixed names (w0, w1, ...) only.
+Not expressed, and refused by the deck writer from the capabilities table: global damping
+(LIGGGHTS has no implicit eq 2.27 form here), the incremental normal spring and the thesis sliding
+rule (LIGGGHTS computes kN × overlap and the C&S rule), cohesion, servo walls, pore fluid.  The
+deck contains numbers and fixed names (w0, w1, ...) only.
 """
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .base import Engine, EngineOutputError, EngineUnsupported, atomic_json, scene_numbers
+from .capabilities import refuse_inexpressible
 from .tables import results_from_records
 
 
@@ -86,9 +88,8 @@ class LiggghtsEngine(Engine):
         return m.group(1) if m else out.stdout.splitlines()[0][:80]
 
     def write_deck(self, scene, sim, deckdir: Path):
+        refuse_inexpressible(self.name, scene)
         S = scene_numbers(scene, sim)
-        if any(c > 0 for c in S["damping"]["C"]) or any(c > 0 for c in S["damping"]["Cr"]):
-            raise EngineUnsupported("global damping has no equivalent in the LIGGGHTS deck; run an undamped variant")
         mats = S["materials"]
         disc_mats = sorted(set(S["discs"]["material"]))
         wall_mats = sorted({w["material"] for w in S["walls"]})
@@ -104,9 +105,6 @@ class LiggghtsEngine(Engine):
                     vals.append(_f(law[key]) if law else "0.0")
             return " ".join(vals)
 
-        for law in S["laws"].values():
-            if law["coh"] != 0:
-                raise EngineUnsupported("cohesion is not expressed in the LIGGGHTS deck")
         x, y, r = (np.asarray(S["discs"][k]) for k in ("x", "y", "r"))
         rmax = float(r.max())
         pad = 4.0 * rmax
@@ -184,7 +182,10 @@ class LiggghtsEngine(Engine):
                     else:  # about P: where demflow's P is when the phase starts
                         piv = self._p_at(w, s0, dt)
                     if origin is not None and (abs(origin[0] - piv[0]) > 1e-9 or abs(origin[1] - piv[1]) > 1e-9):
-                        raise EngineUnsupported("LIGGGHTS deck supports one rotation origin per wall")
+                        raise EngineUnsupported(
+                            f"wall {w['name']!r} rotates about {piv} after rotating about {origin}; the LIGGGHTS "
+                            "deck supports one rotation origin per wall (capabilities feature 'walls'): give "
+                            "every rotating phase of a wall the same pivot")
                     origin = piv
                     om_terms.append(f"{cond}*{_f(ph['omega'])}")
                 s0 = s1
@@ -233,7 +234,10 @@ class LiggghtsEngine(Engine):
         for ph in w["phases"]:
             k = max(0, min(ph["cycles"], step - s0))
             if ph["omega"] and k > 0:
-                raise EngineUnsupported("a rotation about P after another rotation is not expressed")
+                raise EngineUnsupported(
+                    f"wall {w['name']!r}: a rotation about P after another rotation is not expressed in the LIGGGHTS "
+                    "deck (P's path is not tracked through a rotation; capabilities feature 'walls'); give the "
+                    "later phase an explicit pivot")
             px += ph["vx"] * dt * k
             py += ph["vy"] * dt * k
             s0 += ph["cycles"]

@@ -1,18 +1,22 @@
 """Build the common result tables from an external engine's records.
 
 Every engine reader ends here, so YADE, LIGGGHTS and demflow results have the same
-columns, units and sign conventions (see :mod:`demflow.results`).
+columns, units, sign conventions and schema version (see :mod:`demflow.results` and
+:mod:`demflow.schema`; the contacts' force vectors fx, fy come from fn, fs and n by the one
+convention of :func:`demflow.schema.contact_force_on_i`).
 """
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-from ..results import Results
+from ..results import Results, concat, versioned
 
 
 def results_from_records(sim, *, engine, steps, wall, wallpos, track, kinetic, snapshots) -> Results:
-    """sim: the built demflow simulation of the same scene (names, masses, laws).
+    """The result tables (current schema) of an engine run.
+
+    sim: the built demflow simulation of the same scene (names, masses, laws).
 
     steps (R,), wall (R, W, 3) force on each wall and moment about P, wallpos (R, W, 2),
     track (R, T, 2) fn, fs of tracked pairs, kinetic (R,) [force·length] (NaN if unknown);
@@ -51,13 +55,9 @@ def results_from_records(sim, *, engine, steps, wall, wallpos, track, kinetic, s
         wg = np.asarray(s["walls"], dtype=float).reshape(-1, 4)
         geo.append(pd.DataFrame(dict(step=s["step"], wall=sim.wall_names, px=wg[:, 0], py=wg[:, 1], ex=wg[:, 2],
                                      ey=wg[:, 3], h1=sim.wh1, h2=sim.wh2)))
-    cat = lambda xs, cols: pd.concat(xs, ignore_index=True) if xs else pd.DataFrame(columns=cols)
     meta = dict(engine=engine, scene=sim.scene.name, dt=dt, steps=int(sim.scene.n_steps), n_discs=sim.n,
                 walls=sim.wall_names)
-    return Results(
-        wall_forces=cat(wf, ["step", "time", "wall", "fx", "fy", "moment", "px", "py"]),
-        tracked=cat(tr, ["step", "time", "a", "b", "fn", "fs"]),
-        energy=energy,
-        particles=cat(parts, ["step", "time", "id", "x", "y", "theta", "vx", "vy", "omega", "radius"]),
-        contacts=cat(cons, ["step", "time", "i", "j", "wall", "px", "py", "nx", "ny", "fn", "fs", "sliding", "overlap"]),
-        meta=meta, walls={"geometry": cat(geo, ["step", "wall", "px", "py", "ex", "ey", "h1", "h2"])})
+    return versioned(Results(wall_forces=concat(wf, "wall_forces"), tracked=concat(tr, "tracked"),
+                             energy=concat([energy], "energy"), particles=concat(parts, "particles"),
+                             contacts=concat(cons, "contacts"), meta=meta,
+                             walls={"geometry": concat(geo, "wall_geometry")}))

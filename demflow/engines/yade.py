@@ -1,6 +1,7 @@
 """YADE (Debian package ``yade``, 2023.02a): deck writer, runner and reader.
 
-How a demflow scene is expressed (see :mod:`demflow.engines.equivalence`):
+How a demflow scene is expressed (see :mod:`demflow.engines.capabilities`, which the deck writer
+consults to refuse what YADE cannot express):
 discs are spheres with ``blockedDOFs = 'zXY'`` given the disc mass ρπR² and inertia ½mR²;
 contact values per material pair are split into per-material ``ViscElMat`` values that YADE
 combines in series (k = k₁k₂/(k₁+k₂)) and friction angles it combines by the minimum;
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .base import Engine, EngineOutputError, EngineUnsupported, atomic_json, scene_numbers
+from .capabilities import refuse_inexpressible
 from .tables import results_from_records
 
 
@@ -47,13 +49,18 @@ def split_in_series(pairs: dict, disc_mats: list, wall_mats: list, key: str) -> 
         if not math.isclose(got, law[key], rel_tol=1e-12, abs_tol=0.0):
             raise EngineUnsupported(
                 f"YADE combines {key} in series per material; no per-material values reproduce pair "
-                f"({a}, {b}) {key}={law[key]} together with the other pairs")
+                f"({a}, {b}) {key}={law[key]} together with the other pairs (capabilities feature "
+                f"'pair-stiffness'); give the pairs values of the form v_a v_b/(v_a + v_b), or run LIGGGHTS, "
+                f"which takes a table per type pair")
     return vals
 
 
 def _partner(v_known, v_pair, key):
     if v_known is None or v_known <= v_pair:
-        raise EngineUnsupported(f"YADE cannot express pair {key}={v_pair} against a material value {v_known}")
+        raise EngineUnsupported(
+            f"YADE cannot express pair {key}={v_pair} against a material value {v_known}: values combine in series "
+            f"(capabilities feature 'pair-stiffness'), so the pair value must be below the disc material's "
+            f"(2 × the disc-disc value); lower the disc-wall {key} or run LIGGGHTS")
     return v_known * v_pair / (v_known - v_pair)
 
 
@@ -70,15 +77,11 @@ class YadeEngine(Engine):
         return out.stdout.strip()[:80]
 
     def write_deck(self, scene, sim, deckdir: Path):
+        refuse_inexpressible(self.name, scene)
         S = scene_numbers(scene, sim)
-        if S["normal"] != "overlap" or S["sliding"] != "cs":
-            # recorded in meta; the equivalence table names the difference
-            S["model_note"] = "YADE computes N = kN·δ and the C&S sliding rule"
         pairs = {}
         for key, law in S["laws"].items():
             a, b = key.split("|")
-            if law["coh"] != 0:
-                raise EngineUnsupported("YADE's ViscEl law has no cohesion; remove it for a YADE run")
             pairs[(a, b)] = law
             pairs[(b, a)] = law
         disc_mats = sorted(set(S["discs"]["material"]))
@@ -100,7 +103,9 @@ class YadeEngine(Engine):
         for (a, b), law in pairs.items():
             if not math.isclose(math.tan(min(ym[a]["phi"], ym[b]["phi"])), law["mu"], rel_tol=1e-12, abs_tol=1e-15):
                 raise EngineUnsupported(f"YADE takes the smaller friction angle of two materials; pair ({a}, {b}) "
-                                        f"tan φ = {law['mu']} cannot be expressed with the other pairs")
+                                        f"tan φ = {law['mu']} cannot be expressed with the other pairs "
+                                        f"(capabilities feature 'pair-friction'); make disc-wall friction at most "
+                                        f"the disc-disc friction, or run LIGGGHTS (a table per type pair)")
         for m in S["materials"]:
             ym.setdefault(m, dict(kn=0.0, ks=0.0, cn=0.0, cs=0.0, phi=0.0))
         S["yade_materials"] = ym

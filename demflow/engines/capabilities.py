@@ -1,0 +1,204 @@
+"""Engine capabilities: one table of feature → how each engine expresses it → measured consequence.
+
+Each :class:`Feature` says what demflow does, how YADE and LIGGGHTS express it, and a verdict
+per engine:
+
+- ``exact``: the engine computes the same thing (``condition`` names any restriction on values,
+  checked by the deck writer);
+- ``equivalent with matching mode``: the engine computes demflow's *matching mode* (``needs``);
+  a scene outside that mode is refused;
+- ``differs``: the engine computes something else; ``consequence`` is the measured difference;
+- ``cannot express``: the deck writer refuses a scene that uses the feature.
+
+The same table renders the model-equivalence page (:func:`as_html`) and is consulted by the deck
+writers (:func:`refuse_inexpressible`) so that what a page says and what a deck does cannot drift
+apart.  The measurements are from the nine-disc comparison (cs-nine-disc-engines, 2026-11-21) and
+``shared/ENGINES.md`` (YADE 2023.02a, LIGGGHTS-PUBLIC 3.8.0).
+"""
+from __future__ import annotations
+
+import html
+from dataclasses import dataclass
+from typing import Callable
+
+from .base import EngineUnsupported
+
+EXACT = "exact"
+MATCHING = "equivalent with matching mode"
+DIFFERS = "differs"
+CANNOT = "cannot express"
+VERDICTS = (EXACT, MATCHING, DIFFERS, CANNOT)
+ENGINE_NAMES = {"yade": "YADE", "liggghts": "LIGGGHTS"}
+
+
+@dataclass(frozen=True)
+class Expression:
+    """How one engine expresses a feature: its construct, the verdict (one of :data:`VERDICTS`),
+    and the condition on values (``exact``) or the measured consequence (``differs``)."""
+
+    construct: str
+    verdict: str
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Feature:
+    """One row of the capabilities table.
+
+    ``uses(scene)`` is True when a scene needs what a ``cannot express`` engine lacks, or leaves the
+    matching mode of an ``equivalent with matching mode`` engine; ``remedy`` says what to do then.
+    """
+
+    key: str
+    item: str
+    demflow: str
+    yade: Expression
+    liggghts: Expression
+    measured: str = "—"
+    uses: Callable | None = None
+    remedy: str = ""
+
+    def expression(self, engine: str) -> Expression:
+        return getattr(self, engine)
+
+
+def _incremental_normal(scene) -> bool:
+    return scene.contact_model.normal != "overlap"
+
+
+def _thesis_sliding(scene) -> bool:
+    return scene.contact_model.sliding != "cs"
+
+
+def _cohesion(scene) -> bool:
+    return any(law.cohesion != 0 for law in scene.laws.values())
+
+
+def _global_damping(scene) -> bool:
+    d = scene.damping
+    return d.C > 0 or d.C_rot > 0 or d.alpha > 0
+
+
+def _servo(scene) -> bool:
+    return any(w.servo is not None for w in scene.walls)
+
+
+def _fluid(scene) -> bool:
+    return scene.fluid is not None
+
+
+FEATURES: tuple[Feature, ...] = (
+    Feature("discs-2d", "2D discs", "discs, m = ρπR², I = ½mR²",
+            yade=Expression("spheres, blockedDOFs 'zXY', mass and inertia set per body to the disc values", EXACT),
+            liggghts=Expression("dimension 2; `set density` gives ρπR², the integrator ½mR²", EXACT),
+            measured="Fn at C agrees to 5e-11 (undamped, both engines)"),
+    Feature("normal-spring", "normal spring",
+            "incremental N += kN ṅΔt (thesis eq 2.13, default) or N = kN δ (`normal='overlap'`)",
+            yade=Expression("N = kN δ", MATCHING), liggghts=Expression("N = kN δ", MATCHING),
+            measured="incremental vs overlap on the nine-disc test: 6e-7 (Fn at C)", uses=_incremental_normal,
+            remedy="run the scene with ContactModel(normal='overlap'), demflow's matching mode (the incremental "
+                   "form differs by 6e-7 in Fn at C on the nine-disc test; compare it as a named difference)"),
+    Feature("shear-spring", "shear spring", "scalar S on τ, incremental (eq 2.14)",
+            yade=Expression("shear force vector rotated with the contact", EXACT, "in 2D"),
+            liggghts=Expression("accumulated shear displacement projected on the tangent plane", EXACT, "in 2D"),
+            measured="no difference above 1e-10 in compression"),
+    Feature("pair-stiffness", "stiffness and dashpots per material pair",
+            "a table per pair (disc-disc differs from disc-wall)",
+            yade=Expression("per material, combined in series k1k2/(k1+k2): demflow writes 2× the disc-disc value "
+                            "and solves the wall material's value from the disc-wall pair", EXACT,
+                            "needs 2 k_dd > k_dw; other values are refused"),
+            liggghts=Expression("peratomtypepair tables (discs type 1.., walls after)", EXACT),
+            measured="1e-12 (damped nine-disc, YADE)"),
+    Feature("dashpots", "dashpots", "absolute cN, cS on half-step velocities (eqs 2.31-2.32)",
+            yade=Expression("ViscEl cn, cs", EXACT),
+            liggghts=Expression("absolute_damping on (else multiplied by m_eff)", EXACT),
+            measured="damped nine-disc, YADE: 1e-12"),
+    Feature("pair-friction", "friction per pair", "tan φ per pair",
+            yade=Expression("tan(min(φ1, φ2)) of the two materials", EXACT,
+                            "when disc-wall ≤ disc-disc; other values are refused"),
+            liggghts=Expression("coefficientFriction peratomtypepair", EXACT)),
+    Feature("sliding-rule", "sliding rule",
+            "C&S (default): |S| ≤ μFn + c, Fn with dashpot; shear dashpot off while sliding; thesis variant "
+            "|S + D_S| ≤ |N tan φ + c| (`sliding='thesis'`)",
+            yade=Expression("C&S rule", MATCHING), liggghts=Expression("C&S rule", MATCHING),
+            uses=_thesis_sliding,
+            remedy="run the scene with ContactModel(sliding='cs'), demflow's default and matching mode"),
+    Feature("cohesion", "cohesion", "c in the sliding limit |S| ≤ μFn + c (LinearLaw.cohesion)",
+            yade=Expression("ViscEl has no cohesion", CANNOT), liggghts=Expression("not in hooke/stiffness", CANNOT),
+            uses=_cohesion, remedy="set LinearLaw(cohesion=0) for the engine run"),
+    Feature("tension", "tension", "Fn ≥ 0", yade=Expression("clamped at 0", EXACT),
+            liggghts=Expression("limitForce on", EXACT)),
+    Feature("global-damping", "global damping",
+            "C, C* or α (thesis eqs 2.27-2.28, C&S eq 34-36), implicit average",
+            yade=Expression("a PyRunner adds the force that turns Newton's explicit update into eq 2.27 exactly",
+                            EXACT),
+            liggghts=Expression("fix addforce would be the explicit form, not eq 2.27", CANNOT),
+            measured="damped nine-disc, YADE: Fn at C 4e-12", uses=_global_damping,
+            remedy="run an undamped variant (GlobalDamping() with C = C_rot = alpha = 0), or use YADE"),
+    Feature("walls", "walls", "finite segments (C&S Fig. 4); wall velocity taken at the wall's nearest point",
+            yade=Expression("fixed boxes moved kinematically; the contact point is mid-overlap, where a rotating "
+                            "wall's velocity is taken", DIFFERS,
+                            "translation exact; rotation: damped distortion Fn at C 3e-4, wall shear 0.4 %; "
+                            "undamped distortion 5.5 %, amplified by sliding"),
+            liggghts=Expression("two-triangle STL meshes over a thick periodic z, move/mesh (one rotation origin "
+                                "per wall)", DIFFERS,
+                                "translation exact; rotation: undamped distortion 2.6 %, amplified by sliding"),
+            measured="damped distortion (rotating walls), YADE: Fn at C 3e-4, wall shear 0.4 %; undamped "
+                     "distortion: 2.6 % (LIGGGHTS), 5.5 % (YADE), amplified by sliding"),
+    Feature("servo-walls", "servo walls", "thesis eqs 5.11-5.12",
+            yade=Expression("no servo in the deck", CANNOT), liggghts=Expression("no servo in the deck", CANNOT),
+            uses=_servo, remedy="replace the servo by prescribed Phase motion (e.g. the wall path of a demflow run)"),
+    Feature("initial-velocity", "initial velocity", "v(-Δt/2)", yade=Expression("v(-Δt/2)", EXACT),
+            liggghts=Expression("v(0)", DIFFERS, "identical when no force acts at t = 0"),
+            measured="identical when no force acts at t = 0"),
+    Feature("reported-forces", "reported contact forces", "total Fn, Fs on the finder (dashpots included)",
+            yade=Expression("normalForce, shearForce on id2; the reader converts them to force on the finder",
+                            DIFFERS, "shearForce excludes the shear dashpot D_S"),
+            liggghts=Expression("pair/gran/local, wall/gran/local force on atom i, recomputed with end-of-step "
+                                "velocities", DIFFERS, "dumped values of damped contacts can differ ~1 % from "
+                                                       "those applied")),
+    Feature("pore-fluid", "pore fluid (saturated scenes)", "BEM Stokes flow coupled every k steps (thesis §3.4)",
+            yade=Expression("no coupled Stokes BEM in the deck", CANNOT),
+            liggghts=Expression("no coupled Stokes BEM in the deck", CANNOT), uses=_fluid,
+            remedy="run the dry scene (Scene.fluid = None) in the engine and the saturated one in demflow"),
+)
+
+
+def feature(key: str) -> Feature:
+    """The row of ``key``; KeyError names the known keys."""
+    for f in FEATURES:
+        if f.key == key:
+            return f
+    raise KeyError(f"no feature {key!r} in the capabilities table; known: {', '.join(f.key for f in FEATURES)}")
+
+
+def refuse_inexpressible(engine: str, scene) -> None:
+    """Raise EngineUnsupported if ``scene`` uses a feature ``engine`` ('yade' or 'liggghts') cannot
+    express, or leaves the matching mode it needs; the message names the feature, the engine, what
+    the engine does instead and what to do.  Value-dependent limits (``exact`` with a condition)
+    are checked by the deck writers themselves."""
+    name = ENGINE_NAMES[engine]
+    for f in FEATURES:
+        e = f.expression(engine)
+        if f.uses is None or e.verdict not in (CANNOT, MATCHING) or not f.uses(scene):
+            continue
+        what = "cannot express" if e.verdict == CANNOT else "expresses only demflow's matching mode of"
+        raise EngineUnsupported(
+            f"{name} {what} {f.item} (capabilities table, feature {f.key!r}): scene {scene.name!r} uses "
+            f"{f.demflow}; {name} has {e.construct}. To run it in {name}: {f.remedy}")
+
+
+def as_html() -> str:
+    """The model-equivalence page's table: one row per feature, each engine's construct with its
+    verdict and condition or measured consequence."""
+    cols = ["feature", "demflow", "YADE", "YADE verdict", "LIGGGHTS", "LIGGGHTS verdict", "measured"]
+    head = "".join(f"<th>{c}</th>" for c in cols)
+
+    def verdict(e):
+        return e.verdict + (f": {e.note}" if e.note else "")
+
+    rows = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(v)}</td>" for v in (
+            f.item, f.demflow, f.yade.construct, verdict(f.yade), f.liggghts.construct, verdict(f.liggghts),
+            f.measured)) + "</tr>" for f in FEATURES)
+    return f"<table><tr>{head}</tr>{rows}</table>"
