@@ -22,7 +22,7 @@ import math
 import numpy as np
 from numba import prange
 
-from ..jit import njit, njit_parallel
+from ..jit import njit, njit_inline, njit_parallel
 from .kernels import stress_kernels
 from .quadrature import GW, GX, LW, LX, fine_order, order_index, table_4_1
 
@@ -163,6 +163,12 @@ def _row_blocks(i, e, nodes, a, t, nrm, L, quad, mu, s, w, G, H):
         regular_blocks(px, py, a[e, 0], a[e, 1], t[e, 0], t[e, 1], nrm[e, 0], nrm[e, 1], L[e], mu, s, w, m, G, H)
 
 
+@njit_inline
+def _row_scratch():
+    """Per-row work arrays of the assembly loops: quadrature points and weights, the G and H blocks."""
+    return np.empty(MAXQ), np.empty(MAXQ), np.empty((2, 4)), np.empty((2, 4))
+
+
 @njit_parallel
 def assemble_HG(nodes, a, t, nrm, L, quad, mu):
     """[H] and [G] of thesis eq 4.53 (2N_n × 2N_n), with c_ij = ½δ_ij in H (eq 4.51)."""
@@ -171,10 +177,7 @@ def assemble_HG(nodes, a, t, nrm, L, quad, mu):
     Hm = np.zeros((2 * nn, 2 * nn))
     Gm = np.zeros((2 * nn, 2 * nn))
     for i in prange(nn):
-        s = np.empty(MAXQ)
-        w = np.empty(MAXQ)
-        G = np.empty((2, 4))
-        H = np.empty((2, 4))
+        s, w, G, H = _row_scratch()
         for e in range(ne):
             _row_blocks(i, e, nodes, a, t, nrm, L, quad, mu, s, w, G, H)
             Hm[2 * i:2 * i + 2, 4 * e:4 * e + 4] = H
@@ -196,10 +199,7 @@ def assemble_system(nodes, a, t, nrm, L, quad, mu, traction_given, value):
     A = np.zeros((2 * nn, 2 * nn))
     R = np.zeros(2 * nn)
     for i in prange(nn):
-        s = np.empty(MAXQ)
-        w = np.empty(MAXQ)
-        G = np.empty((2, 4))
-        H = np.empty((2, 4))
+        s, w, G, H = _row_scratch()
         for e in range(ne):
             _row_blocks(i, e, nodes, a, t, nrm, L, quad, mu, s, w, G, H)
             if e == i // 2:
