@@ -32,7 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..scene import (Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene, Wall)
+from ..scene import (Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene)
+from .fixtures import box_walls
 from .base import Case, Check
 from ..plotting import save_figure
 
@@ -55,15 +56,12 @@ def nine_disc_scene(name, *, kn, ks, phi_deg, speed, load_cycles, rest_cycles, z
                     dt_fraction=0.1, distort_omega=0.0, distort_cycles=0, contact_c=(4, 5), every=1):
     dt = dt_fraction * 2.0 * np.sqrt(MASS / max(kn, ks))
     hold = rest_cycles + distort_cycles
-    def wall(nm, point, direction, h, inward, side):
-        phases = [Phase(load_cycles, velocity=tuple(speed * np.asarray(inward)))]
-        if distort_cycles and side:
-            phases += [Phase(rest_cycles), Phase(distort_cycles, omega=distort_omega)]
-        return Wall(nm, point, direction, -h, h, "wall", phases=tuple(phases))
-    walls = [wall("bottom", (150.0, 0.0), (1.0, 0.0), 400.0, (0.0, 1.0), False),
-             wall("right", (300.0, 150.0), (0.0, 1.0), 250.0, (-1.0, 0.0), True),
-             wall("top", (150.0, 300.0), (1.0, 0.0), 400.0, (0.0, -1.0), False),
-             wall("left", (0.0, 150.0), (0.0, 1.0), 250.0, (1.0, 0.0), True)]
+    inward = {"bottom": (0.0, 1.0), "right": (-1.0, 0.0), "top": (0.0, -1.0), "left": (1.0, 0.0)}
+    phases = {w: [Phase(load_cycles, velocity=tuple(speed * np.asarray(v)))] for w, v in inward.items()}
+    if distort_cycles:
+        for w in ("right", "left"):
+            phases[w] += [Phase(rest_cycles), Phase(distort_cycles, omega=distort_omega)]
+    walls = box_walls(0.0, 300.0, 0.0, 300.0, half_length=(400.0, 250.0), counter_clockwise=False, phases=phases)
     cn = 2 * zeta * np.sqrt(MASS * kn)
     cs = 2 * zeta * np.sqrt(MASS * ks)
     law = LinearLaw(kn=kn, ks=ks, cn=cn, cs=cs, friction=float(np.tan(np.radians(phi_deg))))

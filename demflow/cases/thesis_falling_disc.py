@@ -29,7 +29,8 @@ import numpy as np
 
 from ..build import build
 from ..plotting import save_figure
-from ..scene import Discs, Fluid, LinearLaw, Material, Outputs, Scene, Wall
+from ..scene import Discs, Fluid, LinearLaw, Material, Outputs, Scene
+from .fixtures import box_walls
 from .base import Case, Check
 
 SRC = "thesis §5.1, eqs 5.1-5.6"
@@ -79,8 +80,7 @@ class FallingDisc(Case):
 
     def scene(self, p, stride=1, elements=None, dt=None, adaptive=False, mu=None, allow=False, name=None):
         b, h = p["b"], p["h"]
-        walls = [Wall("bottom", (0, -h / 2), (1, 0), -b, b, "wall"), Wall("right", (b, 0), (0, 1), -h / 2, h / 2, "wall"),
-                 Wall("top", (0, h / 2), (-1, 0), -b, b, "wall"), Wall("left", (-b, 0), (0, -1), -h / 2, h / 2, "wall")]
+        walls = box_walls(-b, b, -h / 2, h / 2)
         dt = p["dt"] if dt is None else dt
         return Scene(
             name=name or f"falling-disc-k{stride}", discs=Discs([0.0], [0.0], [p["r"]], "disc"),

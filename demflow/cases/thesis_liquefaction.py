@@ -49,8 +49,9 @@ import pandas as pd
 from ..build import build
 from ..coupling import FluidCoupler
 from ..plotting import contact_force_diagram, save_figure
-from ..scene import Discs, Fluid, LinearLaw, Material, Outputs, Phase, Scene, Servo, Wall, WallLoad
+from ..scene import Discs, Fluid, LinearLaw, Material, Outputs, Phase, Scene, Servo, WallLoad
 from .base import Case, Check
+from .fixtures import box_walls, run_until
 from .shear_box import hinged_shear_phases
 
 SRC = "thesis §5.3, Figs 5.9-5.14"
@@ -95,10 +96,7 @@ class Liquefaction(Case):
         rate = p["gamma_rate"]
         n2 = self.shear_steps(p)
         ph = hinged_shear_phases(0.0, W, H, H, rate, n2) if shear else {}
-        return [Wall("bottom", (W / 2, 0.0), (1, 0), -W / 2, W / 2, "wall", phases=ph.get("bottom", ())),
-                Wall("right", (W, H / 2), (0, 1), -H / 2, H / 2, "wall", phases=ph.get("right", ())),
-                Wall("top", (W / 2, H), (-1, 0), -W / 2, W / 2, "wall", servo=servo, phases=top_phases),
-                Wall("left", (0.0, H / 2), (0, -1), -H / 2, H / 2, "wall", phases=ph.get("left", ()))]
+        return box_walls(0.0, W, 0.0, H, phases=dict(ph, top=top_phases), servos={"top": servo} if servo else None)
 
     @staticmethod
     def shear_steps(p):
@@ -138,10 +136,8 @@ class Liquefaction(Case):
         thesis: "the downward motion of the top wall is stopped when the contact force ... reaches F_y"),
         then is held for ``t_settle``."""
         sim = build(self.dry_scene(p))
-        while sim.step < sim.scene.n_steps:
-            sim.run(1)
-            if sim.wall_force[2, 1] >= (1 - p["load_tol"]) * p["Fy"]:
-                break
+        run_until(sim, lambda s: s.wall_force[2, 1] >= (1 - p["load_tol"]) * p["Fy"], max_step=sim.scene.n_steps,
+                  raise_at_limit=False)
         sc = self.dry_scene(p)
         hold = dataclasses.replace(sc, name="liquefaction-hold", walls=self.walls(p, p["box"]),
                                    n_steps=int(round(p["t_settle"] / p["dt"])))

@@ -32,7 +32,8 @@ import numpy as np
 
 from ..build import build
 from ..plotting import save_figure
-from ..scene import Discs, Fluid, LinearLaw, Material, Outputs, Scene, Wall
+from ..scene import Discs, Fluid, LinearLaw, Material, Outputs, Scene
+from .fixtures import box_walls, run_until
 from .base import Case, Check
 
 SRC = "thesis §5.2, Figs 5.5-5.8"
@@ -57,10 +58,7 @@ class Sedimentation(Case):
 
     def scene(self, p):
         W, H = p["width"], p["height"]
-        walls = [Wall("bottom", (W / 2, 0), (1, 0), -W / 2, W / 2, "wall"),
-                 Wall("right", (W, H / 2), (0, 1), -H / 2, H / 2, "wall"),
-                 Wall("top", (W / 2, H), (-1, 0), -W / 2, W / 2, "wall"),
-                 Wall("left", (0, H / 2), (0, -1), -H / 2, H / 2, "wall")]
+        walls = box_walls(0.0, W, 0.0, H)
         xs = [float(v) for v in str(p["x0"]).split(",")]
         sc = Scene(name="sedimentation", discs=Discs(xs, [p["y0"]] * 3, [p["r"]] * 3, "disc"),
                    materials={"disc": Material(p["rho_s"]), "wall": Material()},
@@ -80,12 +78,8 @@ class Sedimentation(Case):
         t0 = time.perf_counter()
         sim = build(self.scene(p))
         n_max = int(p["t_max"] / sim.dt)
-        landed = False
-        while sim.step < n_max:
-            sim.run(int(p["chunk"]))
-            if np.all(sim.y - sim.r <= 0.0) and np.max(np.abs(sim.vy)) < 0.01:
-                landed = True
-                break
+        landed = run_until(sim, lambda s: np.all(s.y - s.r <= 0.0) and np.max(np.abs(s.vy)) < 0.01, max_step=n_max,
+                           chunk=int(p["chunk"]), raise_at_limit=False)
         res = sim.results()
         res.meta.update(wall_s=time.perf_counter() - t0, landed=landed, t_end=sim.step * sim.dt)
         return {"three-discs": res}
