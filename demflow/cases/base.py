@@ -2,22 +2,38 @@
 
 A case is a class with a stable ``name``; its ``params`` (defaults) can be overridden from
 the CLI (``--set key=value``).  ``scenes(p)`` returns the scenes of its variants;
-``run(p)`` runs them (returning :class:`~demflow.results.Results` per variant, plus any
-extra data the checks need); ``checks`` compares with the source's reference values using
-tolerances from :mod:`demflow.tolerances`; ``figures`` draws what a person looks at.
+``run(p)`` runs them and returns a :class:`CaseRun` (the :class:`~demflow.results.Results`
+of each variant, plus any extra data the checks need); ``checks`` compares with the source's
+reference values using tolerances from :mod:`demflow.tolerances` (informative lines are
+:meth:`Check.info`, never counted as passes or failures); ``figures`` draws what a person
+looks at.  Hooks instead of name branches: ``reference_plan`` (``demflow reference``),
+``comparison_case`` (``demflow compare``), ``tables`` and ``page_sections`` (the report page).
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..tolerances import tol
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from ..results import Results
+    from ..scene import Scene
+
+INFO = "info"  # the kind of an informative line (Check.info)
 
 
 @dataclass
 class Check:
-    """One validation check: value vs reference, within a tolerance from tolerances.py."""
+    """One validation check: value vs reference, within a tolerance from tolerances.py.
+
+    ``kind`` is "check" for a pass/fail check and "info" for an informative line
+    (:meth:`info`): shown on the report with its value, never counted as a pass or a failure.
+    """
 
     name: str
     value: float
@@ -26,6 +42,7 @@ class Check:
     source: str
     why: str
     relative: bool = True
+    kind: str = "check"
     passed: bool = field(init=False)
     error: float = field(init=False)
 
@@ -46,6 +63,57 @@ class Check:
         c.passed = bool(ok)
         c.error = 0.0 if ok else math.inf
         return c
+
+    @classmethod
+    def info(cls, name, value, source, why, reference=None):
+        """An informative line (not pass/fail): ``value`` shown beside ``reference`` (same units;
+        without one the value is its own reference), with the relative error; tolerance ∞."""
+        if reference is None:
+            c = cls(name, float(value), float(value), math.inf, source, why, relative=False, kind=INFO)
+        else:
+            c = cls(name, float(value), float(reference), math.inf, source, why, kind=INFO)
+        c.passed = True
+        return c
+
+    @property
+    def informative(self) -> bool:
+        return self.kind == INFO
+
+
+def kind_of(check) -> str:
+    """The kind of a Check or of its summary dict; a summary written before kinds existed marks an
+    informative line by its infinite tolerance."""
+    if isinstance(check, dict):
+        return check.get("kind") or (INFO if check["tolerance"] == math.inf else "check")
+    return check.kind
+
+
+def counted(checks) -> list:
+    """The pass/fail checks of a list (the informative lines left out): Check objects or their
+    summary dicts."""
+    return [c for c in checks if kind_of(c) != INFO]
+
+
+@dataclass
+class CaseRun:
+    """What a case's run returns: ``results`` maps a variant's name to its result tables (the
+    CLI saves each under runs/CASE/VARIANT); ``extras`` holds whatever else the checks and
+    figures need (packings, statistics, BEM solutions, engine rows), by name."""
+
+    results: dict[str, Results] = field(default_factory=dict)
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ReferencePlan:
+    """How ``demflow reference CASE`` makes a case's engine reference runs: the case name the runs
+    are stored under (reference_runs/STORE/), the parameters, the variants an engine can run
+    (engine name → variant names) and the scene of a variant (variant, parameters → Scene)."""
+
+    store: str
+    params: dict[str, Any]
+    variants: Callable[[str], tuple[str, ...]]
+    scene: Callable[[str, dict], Scene]
 
 
 class Case:
@@ -69,13 +137,32 @@ class Case:
     def scenes(self, p) -> dict:
         raise NotImplementedError
 
-    def run(self, p) -> dict:
+    def run(self, p) -> CaseRun:
         from ..build import build
 
-        return {name: build(scene).run().results() for name, scene in self.scenes(p).items()}
+        return CaseRun({name: build(scene).run().results() for name, scene in self.scenes(p).items()})
 
-    def checks(self, results, p) -> list[Check]:
+    def checks(self, run: CaseRun, p) -> list[Check]:
         return []
 
-    def figures(self, results, p, outdir) -> list[str]:
+    def figures(self, run: CaseRun, p, outdir) -> list[str]:
+        return []
+
+    def tables(self, run: CaseRun, p) -> list[tuple[str, pd.DataFrame]]:
+        """(title, table) pairs shown on the case's report page."""
+        return []
+
+    # -- hooks the CLI and the report look up instead of branching on a case's name
+    def reference_plan(self) -> ReferencePlan | None:
+        """How `demflow reference` makes this case's engine references; None: it has none."""
+        return None
+
+    def comparison_case(self) -> Case | None:
+        """A fresh case object whose ``engines`` and ``live`` the `demflow compare` command sets;
+        None: the case compares no engines."""
+        return None
+
+    @staticmethod
+    def page_sections() -> list[tuple[str, str]]:
+        """(title, HTML) sections added to the case's report page after its checks."""
         return []

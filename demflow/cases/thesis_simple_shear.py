@@ -22,7 +22,7 @@ import pandas as pd
 from ..build import build
 from ..plotting import contact_force_diagram, save_figure
 from . import simple_shear_setup as setup
-from .base import Case, Check
+from .base import Case, CaseRun, Check
 
 SRC = "thesis §5.4-5.6, Figs 5.15-5.49"
 VARIANTS = ("loose-dry", "dense-dry", "loose-saturated", "dense-saturated")
@@ -161,8 +161,7 @@ class SimpleShear(Case):
             kind, state = v.split("-")
             out[v] = run_variant(specs[kind], state == "saturated", p)
         done = {(int(p["seed"]), kind): (specs[kind], out[f"{kind}-dry"]) for kind in specs if f"{kind}-dry" in out}
-        self._ensemble = self.ensemble(p, done) if p["ensemble"] else None
-        return out
+        return CaseRun(out, {"ensemble": self.ensemble(p, done) if p["ensemble"] else None})
 
     @staticmethod
     def ensemble(p, done=None) -> pd.DataFrame:
@@ -184,7 +183,8 @@ class SimpleShear(Case):
                                  **b))
         return pd.DataFrame(rows)
 
-    def checks(self, results, p):
+    def checks(self, run, p):
+        results = run.results
         out = []
         for v, res in results.items():
             kind, state = v.split("-")
@@ -225,7 +225,8 @@ class SimpleShear(Case):
                                          b["p13"], 0.0, "simple-shear.incompressible", SRC))
         return out
 
-    def tables(self, results, p):
+    def tables(self, run, p):
+        results = run.results
         rows = []
         thesis = {"loose": (0.89, 0.69, 0.2611), "dense": (0.89, 0.682, 0.2465)}
         for v, res in results.items():
@@ -240,12 +241,13 @@ class SimpleShear(Case):
                              density_scale=m["density_scale"], dt=m["dt"], solves=m["solves"], wall_s=m["wall_s"],
                              dem_s=m["dem_s"], bem_s=m["bem_s"]))
         out = [("Variants (dh in % of H; p in units of F_y/W; times in s on this machine)", pd.DataFrame(rows))]
-        ens = getattr(self, "_ensemble", None)
+        ens = run.extras.get("ensemble")
         if ens is not None and len(ens):
             out.append(("Seed ensemble, dry shear (how much the lost arrangement matters)", ens))
         return out
 
-    def figures(self, results, p, outdir):
+    def figures(self, run, p, outdir):
+        results = run.results
         import matplotlib.pyplot as plt
 
         figs = []

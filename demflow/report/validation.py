@@ -19,6 +19,16 @@ import matplotlib
 matplotlib.use("Agg")
 
 from ..cases import CASES  # noqa: E402
+from ..cases.base import INFO, counted, kind_of  # noqa: E402
+
+
+def check_counts(checks) -> str:
+    """"n/m checks pass, k informative" for a case's checks (summary dicts): the informative lines
+    are counted apart, never as passes or failures."""
+    judged = counted(checks)
+    n_info = len(checks) - len(judged)
+    return (f"{sum(ch['passed'] for ch in judged)}/{len(judged)} checks pass"
+            + (f", {n_info} informative" if n_info else ""))
 
 
 def _atomic_text(path: Path, text: str):
@@ -51,21 +61,21 @@ def run_validation(names=None, outdir="reports/validation", overrides=None, case
         case = cases[name]
         p = case.merged((overrides or {}).get(name))
         t0 = time.perf_counter()
-        results = case.run(p)
+        run = case.run(p)
         wall = time.perf_counter() - t0
-        checks = case.checks(results, p)
+        checks = case.checks(run, p)
         casedir = outdir / name
         casedir.mkdir(parents=True, exist_ok=True)
-        figs = [Path(f).name for f in case.figures(results, p, str(casedir))]
+        figs = [Path(f).name for f in case.figures(run, p, str(casedir))]
         tables = [dict(title=t, html=df.to_html(float_format=lambda v: f"{v:.4g}", border=0))
-                  for t, df in (case.tables(results, p) if hasattr(case, "tables") else [])]
+                  for t, df in case.tables(run, p)]
         summary["cases"][name] = dict(
             run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title, source=case.source,
             params=p, wall_time_s=round(wall, 3), tables=tables,
-            passed=all(c.passed for c in checks), assumptions=list(case.assumptions), figures=figs,
+            passed=all(c.passed for c in counted(checks)), assumptions=list(case.assumptions), figures=figs,
             checks=[dict(name=c.name, value=c.value, reference=c.reference, error=c.error,
                          tolerance=c.tolerance, passed=c.passed, source=c.source, why=c.why,
-                         relative=c.relative) for c in checks])
+                         relative=c.relative, kind=c.kind) for c in checks])
     write_report(summary, outdir)
     return summary
 
@@ -92,28 +102,31 @@ def _not_run(summary):
             f"<code>demflow validate --all</code>): {html.escape(', '.join(missing))}</p>")
 
 
+def _mark(ch):
+    """(CSS class, text) of a check's verdict cell."""
+    if kind_of(ch) == INFO:
+        return "small", "info"
+    return ("pass", "pass") if ch["passed"] else ("fail", "FAIL")
+
+
 def write_report(summary, outdir="reports/validation"):
     outdir = Path(outdir)
     rows = []
     for name, c in sorted(summary["cases"].items(), key=lambda kv: list(CASES).index(kv[0])):
-        n_ok = sum(ch["passed"] for ch in c["checks"])
         rows.append(f"<tr><td><a href='{name}/index.html'>{name}</a></td><td>{html.escape(c['title'])}</td>"
-                    f"<td>{html.escape(c['source'])}</td><td>{n_ok}/{len(c['checks'])}</td>"
+                    f"<td>{html.escape(c['source'])}</td><td>{check_counts(c['checks'])}</td>"
                     f"<td class='{'pass' if c['passed'] else 'fail'}'>{'PASS' if c['passed'] else 'FAIL'}</td>"
                     f"<td>{c['wall_time_s']}</td><td class='small'>{c.get('run_at', summary['generated'])}"
                     f"{' (slow: runs with --all or --case; otherwise kept from its last run)' if c.get('slow') else ''}</td></tr>")
         checks = "".join(
             f"<tr><td>{html.escape(ch['name'])}</td><td>{_fmt(ch['value'])}</td><td>{_fmt(ch['reference'])}</td>"
             f"<td>{_fmt(ch['error'])}</td><td>{_fmt(ch['tolerance'])}</td>"
-            f"<td class='{'pass' if ch['passed'] else 'fail'}'>{'pass' if ch['passed'] else 'FAIL'}</td>"
+            f"<td class='{_mark(ch)[0]}'>{_mark(ch)[1]}</td>"
             f"<td class='small'>{html.escape(ch['source'])}</td><td class='small'>{html.escape(ch['why'])}</td></tr>"
             for ch in c["checks"])
         assumptions = "".join(f"<li>{html.escape(a)}</li>" for a in c["assumptions"])
-        extra = ""
-        if name == "cs-nine-disc-engines":
-            from ..engines.equivalence import as_html
-
-            extra = f"<h2>Model-equivalence table</h2>{as_html()}"
+        extra = "".join(f"<h2>{html.escape(title)}</h2>{body}"
+                        for title, body in (CASES[name].page_sections() if name in CASES else []))
         for t in c.get("tables", []):  # pandas' to_html escapes the cells
             extra += f"<h2>{html.escape(t['title'])}</h2>{t['html']}"
         figs = "".join(f"<p><img src='{html.escape(f)}'></p>" for f in c["figures"])
@@ -124,7 +137,8 @@ def write_report(summary, outdir="reports/validation"):
                 f"Wall time {c['wall_time_s']} s. Run it: <code>demflow run {name}</code>.</p>"
                 f"<h2>Assumptions (what the sources leave open)</h2><ul>{assumptions}</ul>"
                 f"<h2>Checks</h2><p class='small'>error is relative unless the reference is 0; the tolerance and why "
-                f"come from <code>demflow/tolerances.py</code>; '—' marks an informative row.</p>"
+                f"come from <code>demflow/tolerances.py</code>; 'info' marks an informative row (tolerance '—'), "
+                f"never counted as a pass or a failure: {check_counts(c['checks'])}.</p>"
                 f"<table><tr><th>check</th><th>demflow</th><th>reference</th><th>error</th><th>tolerance</th>"
                 f"<th></th><th>source</th><th>why this tolerance</th></tr>{checks}</table>{extra}<h2>Figures</h2>{figs}"
                 f"</body></html>")
