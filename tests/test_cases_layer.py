@@ -123,8 +123,8 @@ def test_run_until_on_a_real_simulation():
 
 # -- Check.info and the counts
 def test_info_is_reported_but_never_counted():
-    ok = Check("a", 1.0, 1.0, 1e-3, "src", "why")
-    bad = Check("b", 2.0, 1.0, 1e-3, "src", "why")
+    ok = Check("a", 1.0, 1.0, 1e-3, "src", "why", kind="exact")
+    bad = Check("b", 2.0, 1.0, 1e-3, "src", "why", kind="source")
     i1 = Check.info("c", 5.0, "src", "shown only")
     i2 = Check.info("d", 1.5, "src", "shown only", reference=1.0)
     assert i1.kind == i2.kind == "info" and i1.passed and i2.passed and i1.informative
@@ -138,7 +138,7 @@ def test_info_is_reported_but_never_counted():
     assert check_counts(rows[:1]) == "1/1 checks pass"
     # a summary written before kinds existed: infinite tolerance marks an informative line
     assert check_counts([dict(passed=True, tolerance=math.inf), dict(passed=True, tolerance=0.1)]) == \
-        "1/1 checks pass, 1 informative"
+        "0/0 checks pass, 1/1 unclassified, 1 informative"
 
 
 def test_report_counts_info_apart(tmp_path):
@@ -146,7 +146,7 @@ def test_report_counts_info_apart(tmp_path):
 
     checks = [dict(name=c.name, value=c.value, reference=c.reference, error=c.error, tolerance=c.tolerance,
                    passed=c.passed, source=c.source, why=c.why, relative=c.relative, kind=c.kind)
-              for c in (Check("a", 1.0, 1.0, 1e-3, "s", "w"), Check.info("i", 2.0, "s", "w"))]
+              for c in (Check("a", 1.0, 1.0, 1e-3, "s", "w", kind="exact"), Check.info("i", 2.0, "s", "w"))]
     summary = dict(generated="now", python="3", machine="m", cases={"thesis-one-disc": dict(
         title="t", source="s", params={}, wall_time_s=0.0, passed=True, assumptions=[], figures=[], checks=checks)})
     write_report(summary, tmp_path)
@@ -188,3 +188,50 @@ def test_a_case_run_is_a_caserun():
     run = case.run(p)
     assert isinstance(run, CaseRun) and set(run.results) == {"thesis"} and run.extras == {}
     assert sum(c.kind == "info" for c in case.checks(run, p)) == 4
+
+
+# -- kinds (issue 18 item 1)
+def test_every_check_has_a_kind_and_tolerances_carry_one():
+    from demflow.tolerances import KINDS, TOLERANCES
+
+    assert all(t.kind in KINDS for t in TOLERANCES.values())
+    assert Check.against("x", 1.0, 1.0, "bem.moving-planes", "s").kind == "calibration"
+    with pytest.raises(ValueError, match="kind '' is not one of"):
+        Check("x", 1.0, 1.0, 0.1, "s", "w")
+    with pytest.raises(TypeError):
+        Check.condition("x", True, 1.0, "s", "w")
+
+
+def test_calibrations_and_info_are_not_validation_and_summary_is_strict_json(tmp_path):
+    import json
+
+    from demflow.report import check_counts, write_report
+
+    cs = [Check("a", 1.0, 1.0, 1e-3, "s", "w", kind="source"), Check("b", 1.0, 1.0, 1e-3, "s", "w", kind="exact"),
+          Check.condition("c", False, 3.0, "s", "w", kind="calibration"), Check.info("i", 2.0, "s", "w")]
+    rows = [dict(name=c.name, value=c.value, reference=c.reference, error=c.error, tolerance=c.tolerance,
+                 passed=c.passed, source=c.source, why=c.why, relative=c.relative, kind=c.kind) for c in cs]
+    assert check_counts(rows) == "2/2 checks pass, 0/1 calibrations, 1 informative"
+    summary = dict(generated="now", python="3", machine="m", cases={"thesis-one-disc": dict(
+        title="t", source="s", params={}, wall_time_s=0.0, passed=False, assumptions=[], figures=[], checks=rows)})
+    write_report(summary, tmp_path)
+    d = json.load(open(tmp_path / "summary.json"), parse_constant=lambda c: 1 / 0)
+    assert d["validation"] == {"passed": 2, "total": 2}
+    assert d["counts"]["calibration"] == {"passed": 0, "total": 1} and d["counts"]["info"]["total"] == 1
+    assert d["cases"]["thesis-one-disc"]["checks"][3]["tolerance"] is None
+    index = (tmp_path / "index.html").read_text()
+    assert "Validation checks passed: 2/2" in index and "calibration 0/1" in index
+
+
+def test_every_check_built_in_demflow_names_its_kind():
+    """Static: a slow case must not find out at run time that a check lacks its kind."""
+    missing = []
+    for f in (Path(demflow.__file__).parent / "cases").glob("*.py"):
+        for n in ast.walk(ast.parse(f.read_text())):
+            if isinstance(n, ast.Call):
+                fn = n.func
+                direct = isinstance(fn, ast.Name) and fn.id == "Check"
+                cond = isinstance(fn, ast.Attribute) and fn.attr == "condition" and getattr(fn.value, "id", "") == "Check"
+                if (direct or cond) and "kind" not in {k.arg for k in n.keywords}:
+                    missing.append(f"{f.name}:{n.lineno}")
+    assert not missing, f"checks without a kind: {missing}; pass kind= (demflow/tolerances.py lists the kinds)"

@@ -16,7 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from ..tolerances import tol
+from ..tolerances import KINDS, VALIDATION_KINDS, tol
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -31,8 +31,10 @@ INFO = "info"  # the kind of an informative line (Check.info)
 class Check:
     """One validation check: value vs reference, within a tolerance from tolerances.py.
 
-    ``kind`` is "check" for a pass/fail check and "info" for an informative line
-    (:meth:`info`): shown on the report with its value, never counted as a pass or a failure.
+    ``kind`` says what the reference is (:data:`demflow.tolerances.KINDS`): a source's figure, an
+    exact solution, another code, a self-consistency identity, a calibration (a lost parameter
+    fitted to this very figure: never counted as validation) or "info" (:meth:`info`): shown on
+    the report with its value, never counted as a pass or a failure.
     """
 
     name: str
@@ -42,24 +44,28 @@ class Check:
     source: str
     why: str
     relative: bool = True
-    kind: str = "check"
+    kind: str = ""
     passed: bool = field(init=False)
     error: float = field(init=False)
 
     def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ValueError(f"check {self.name!r}: kind {self.kind!r} is not one of {KINDS}; say what its reference "
+                             f"is (demflow/tolerances.py explains each kind)")
         diff = abs(self.value - self.reference)
         self.error = diff / abs(self.reference) if self.relative and self.reference != 0 else diff
         self.passed = bool(math.isfinite(self.error) and self.error <= self.tolerance)
 
     @classmethod
     def against(cls, name, value, reference, tolerance_name, source):
+        """value vs reference within the named tolerance of tolerances.py, whose ``kind`` it takes."""
         t = tol(tolerance_name)
-        return cls(name, float(value), float(reference), t.value, source, t.why, relative=not t.absolute)
+        return cls(name, float(value), float(reference), t.value, source, t.why, relative=not t.absolute, kind=t.kind)
 
     @classmethod
-    def condition(cls, name, ok: bool, value: float, source: str, why: str):
+    def condition(cls, name, ok: bool, value: float, source: str, why: str, *, kind: str):
         """A qualitative check (e.g. 'faster loading gives larger oscillation'): value is reported."""
-        c = cls(name, float(value), float(value), 0.0, source, why, relative=False)
+        c = cls(name, float(value), float(value), 0.0, source, why, relative=False, kind=kind)
         c.passed = bool(ok)
         c.error = 0.0 if ok else math.inf
         return c
@@ -82,10 +88,28 @@ class Check:
 
 def kind_of(check) -> str:
     """The kind of a Check or of its summary dict; a summary written before kinds existed marks an
-    informative line by its infinite tolerance."""
+    informative line by its infinite (or null) tolerance and leaves the others "unclassified"."""
     if isinstance(check, dict):
-        return check.get("kind") or (INFO if check["tolerance"] == math.inf else "check")
+        return check.get("kind") or (INFO if check["tolerance"] in (math.inf, None) else "unclassified")
     return check.kind
+
+
+def kind_counts(checks) -> dict[str, dict[str, int]]:
+    """{kind: {"passed": n, "total": m}} over Check objects or their summary dicts, in KINDS order."""
+    out = {}
+    for c in checks:
+        k = kind_of(c)
+        row = out.setdefault(k, {"passed": 0, "total": 0})
+        row["total"] += 1
+        row["passed"] += bool(c["passed"] if isinstance(c, dict) else c.passed)
+    order = list(KINDS) + sorted(set(out) - set(KINDS))
+    return {k: out[k] for k in order if k in out}
+
+
+def validation_passes(checks) -> tuple[int, int]:
+    """(passed, total) over the checks that count as validation (not calibration, not info)."""
+    vc = [c for c in checks if kind_of(c) in VALIDATION_KINDS]
+    return sum(bool(c["passed"] if isinstance(c, dict) else c.passed) for c in vc), len(vc)
 
 
 def counted(checks) -> list:

@@ -158,26 +158,26 @@ class NineDisc(Case):
                               "path dependent (see assumptions).", reference=feq_u))
         out.append(Check.condition("undamped oscillation amplitude / Feq (C&S ≈ 0.15; Δt fraction fitted to it)",
                                    0.10 < amp_u / feq_u < 0.20, amp_u / feq_u, SRC + ", Fig. 6",
-                                   "Calibration, not prediction: the lost Δt fraction was chosen to give C&S's value."))
+                                   "Calibration, not prediction: the lost Δt fraction was chosen to give C&S's value.", kind="calibration"))
         for fast, slow, lab in (("undamped", "speed-0.04-kn1.35e9", "kn = 1.35e9: 0.12 vs 0.04"),
                                 ("speed-0.36-kn1.5e8", "speed-0.12-kn1.5e8", "kn = 1.5e8: 0.36 vs 0.12")):
             fa, aa = oscillation(results[fast], 40)
             fb, ab = oscillation(results[slow], 120)
             out.append(Check.condition(f"faster loading, larger oscillation ({lab}): amplitude ratio fast/slow",
                                        aa > ab, aa / ab if ab > 0 else float("inf"), SRC + ", Fig. 7",
-                                       "C&S: the amplitude after loading increases with the loading speed."))
+                                       "C&S: the amplitude after loading increases with the loading speed.", kind="source"))
         end = {k: contact_c_force(results[k]) for k in results if k.startswith("distortion")}
         f15 = [end[k][1][-1] for k in ("distortion-phi15-ks2of3", "distortion-phi15-ks1")]
         out.append(Check.condition("φ = 15°: Fn at C after distortion, ks/kn = 1 vs 2/3 (C&S: curves nearly coincide)",
                                    abs(f15[1] / f15[0] - 1) < 0.02, f15[1] / f15[0], SRC + ", Fig. 9a",
                                    "C&S: for a small friction angle slip sets in early, so ks/kn hardly matters "
-                                   "(within 2 % required)."))
+                                   "(within 2 % required).", kind="source"))
         s_, fn23, _ = end["distortion-phi30-ks2of3"]
         _, fn1, _ = end["distortion-phi30-ks1"]
         before = np.searchsorted(s_, p["rest_cycles"] + 39)
         out.append(Check.condition("φ = 30°: Fn at C after compression, ks/kn = 1 / ks/kn = 2/3 (C&S: lower for 1)",
                                    fn1[before] < fn23[before], fn1[before] / fn23[before], SRC + ", Fig. 9b",
-                                   "C&S: wall shear carries more of the load when ks/kn is higher, lowering Fn at C."))
+                                   "C&S: wall shear carries more of the load when ks/kn is higher, lowering Fn at C.", kind="source"))
         out.append(Check.info("φ = 30°: peak Fn at C in distortion, ks/kn = 1 / 2/3 (informative; C&S: > 1)",
                               fn1[before:].max() / fn23[before:].max(), SRC + ", Fig. 9b",
                               "Not reproduced with the reconstructed geometry: contact C slides as soon as "

@@ -279,7 +279,7 @@ class Photoelastic(Case):
                 r = st[stage]["F_H/F_V"]
                 out.append(Check.condition(f"table1 seed {seed}, stage {stage}: F_H/F_V in [{lo}, {hi}] "
                                            f"(experiment to C&S numerics)", lo <= r <= hi, r, src,
-                                           "Acceptance: the range from the experiment to C&S's numerical ratios"))
+                                           "Acceptance: the range from the experiment to C&S's numerical ratios", kind="source"))
                 out.append(Check.against(f"table1 seed {seed}, stage {stage}: ΔF/F below 3 %", st[stage]["ΔF/F"], 0.0,
                                          "photoelastic.equilibrium", src))
         for t in ("table2", "table3"):
@@ -305,12 +305,12 @@ class Photoelastic(Case):
                 ks = stats.ks_2samp(ref[stage]["f"], st["f"])
                 out.append(Check.condition(f"{e} vs demflow, stage {stage}: two-sample KS on f = F/<F> does not reject "
                                            f"at 5 % (p = {ks.pvalue:.3g})", ks.pvalue >= 0.05, ks.pvalue, src,
-                                           "Acceptance: same packing and protocol; the KS p-value must be ≥ 0.05"))
+                                           "Acceptance: same packing and protocol; the KS p-value must be ≥ 0.05", kind="cross-code"))
                 lo, hi = bands[stage]["q-model N"]
                 N = st["q-model N"]
                 out.append(Check.condition(f"{e}, stage {stage}: q-model N = {N:.3g} inside demflow's seed band "
                                            f"[{lo:.3g}, {hi:.3g}]", lo <= N <= hi, N, src,
-                                           "Acceptance: engine difference judged against the seed-to-seed band"))
+                                           "Acceptance: engine difference judged against the seed-to-seed band", kind="cross-code"))
         return out
 
     def tables(self, run, p):

@@ -39,7 +39,7 @@ def _tol(name):
 
 def _against(name, value, reference, tname, source):
     t = _tol(name=tname)
-    return Check(name, float(value), float(reference), t.value, source, t.why, relative=not t.absolute)
+    return Check(name, float(value), float(reference), t.value, source, t.why, relative=not t.absolute, kind=t.kind)
 
 
 class BEMRun:
@@ -150,13 +150,13 @@ class CylinderPoiseuille(_BEMCase):
         return [
             Check.condition("extrapolated T/μU inside the literature range 24.15-24.55", 24.15 <= ext <= 24.55, ext,
                             self.source, "Acceptance of issue 3: the refined value lies in the range quoted by the "
-                            "thesis (Bézine & Bonneau 24.15, Takaisi 24.23, Harrison 24.55)."),
+                            "thesis (Bézine & Bonneau 24.15, Takaisi 24.23, Harrison 24.55).", kind="source"),
             Check.condition("finest-mesh T/μU inside 24.15-24.55", 24.15 <= T[-1] <= 24.55, T[-1], self.source,
-                            "The computed value itself, not only its extrapolation, is in the literature range."),
+                            "The computed value itself, not only its extrapolation, is in the literature range.", kind="source"),
             Check.condition("monotone O(h²) convergence (successive changes shrink ≥ 3×)",
                             len(T) < 3 or abs(T[1] - T[0]) >= 3 * abs(T[2] - T[1]), T[-1], self.source,
                             "Straight elements on a circle and linear interpolation converge at O(h²): each halving "
-                            "of the element size should cut the change by about 4."),
+                            "of the element size should cut the change by about 4.", kind="self-consistency"),
             _against("remaining discretisation error (Richardson) of T/μU", corr, 0.0, "bem.mesh-converged",
                      self.source),
             _against("transverse force |F_y|/T (symmetry)", abs(last["Fy"]) / abs(last["T"]), 0.0, "bem.symmetry",

@@ -221,7 +221,7 @@ class Liquefaction(Case):
         f0 = res.meta["F_load"] / Fy
         out = [Check.condition("dry stage: the column stands and carries F_y (F_C(wall 3) / F_y when the wall stops)",
                                f0 >= 1 - p["load_tol"], f0, SRC, "Thesis Fig. 5.9(b): the top wall is stopped when "
-                               "its contact force reaches F_y (within load_tol)."),
+                               "its contact force reaches F_y (within load_tol).", kind="self-consistency"),
                _info("F_C(wall 3) / F_y when the liquid is added (after t_settle; the column creeps and rebounds)",
                      wf.fy.iloc[0] / Fy, 1.0, SRC),
                Check.against("contacts broken: contact force on wall 3 / F_y at γ = 0.7 %", wf.fy.iloc[-1] / Fy, 0.0,

@@ -100,21 +100,21 @@ class Sedimentation(Case):
             d = np.hypot(tr[a].x - tr[b].x, tr[a].y - tr[b].y) - 2 * r
             gaps.append(float(d.min()))
         out = [Check.condition("no disc-disc contact: smallest surface gap [cm] > 0", min(gaps) > 0, min(gaps), SRC,
-                               "Thesis §5.2: 'at no instant of time do the particles touch each other'."),
+                               "Thesis §5.2: 'at no instant of time do the particles touch each other'.", kind="source"),
                Check.condition("all three discs reach the bottom wall and come to rest, no blow-up",
                                bool(res.meta["landed"]), res.meta["t_end"], SRC,
                                "Thesis §5.2 aborted at ~43 s near the bottom; the drag time-step criterion should carry "
-                               "the run to rest (value: simulated time [s])")]
+                               "the run to rest (value: simulated time [s])", kind="self-consistency")]
         dx = (tr[1].x - tr[2].x).to_numpy()
         crossings = int(np.sum(np.diff(np.sign(dx)) != 0))
         out.append(Check.condition("discs 2 and 3 trajectories intertwine (their x order changes)", crossings >= 1,
                                    crossings, SRC, "Thesis Fig. 5.5: the trajectories of discs 2 and 3 are intertwined "
-                                                   "(value: number of x-order changes)"))
+                                                   "(value: number of x-order changes)", kind="source"))
         vmed = float(np.median(np.concatenate([tr[i].vy.to_numpy() for i in tr])[:]))
         vpk = float(max(np.max(np.hypot(tr[i].vx, tr[i].vy)) for i in tr))
         out.append(Check.condition("no drag instability: peak speed <= 2 × the median fall speed", vpk <= 2 * abs(vmed),
                                    vpk / abs(vmed), SRC, "An explicit drag held too long makes the velocity "
-                                   "oscillate step to step (thesis §5.2); value: peak speed / median speed"))
+                                   "oscillate step to step (thesis §5.2); value: peak speed / median speed", kind="self-consistency"))
         vmax = float(max(-tr[i].vy.min() for i in tr))
         out.append(Check.info("largest vertical speed [cm/s] (text: about 20; ρs inferred from it)", vmax, SRC,
                               "Shown for comparison; not pass/fail (the density was inferred from this speed).",

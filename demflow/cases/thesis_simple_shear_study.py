@@ -100,7 +100,7 @@ class SimpleShearStudy(Case):
         t = self.table(run, p).set_index("run")
         d = t.loc["default"]
         out = [Check.condition("default settings: saturated shear to γ = 10.5 % in ≤ 600 s (value: wall time [s])",
-                               d.wall_s <= 600.0, d.wall_s, SRC, "Issue 4 acceptance: ≤ 10 minutes on this machine.")]
+                               d.wall_s <= 600.0, d.wall_s, SRC, "Issue 4 acceptance: ≤ 10 minutes on this machine.", kind="self-consistency")]
         # convergence, each knob towards the reference (PySDM-style: the error shrinks with resolution)
         for coarse, fine, what in (("density ×100", "density ×30", "density scaling"),
                                    ("8 elements", "16 elements", "elements per disc")):
@@ -110,7 +110,7 @@ class SimpleShearStudy(Case):
                     f"ratio fine/coarse)", t.loc[fine].p_rms_error < t.loc[coarse].p_rms_error,
                     t.loc[fine].p_rms_error / max(t.loc[coarse].p_rms_error, 1e-300), SRC,
                     "A knob whose error does not shrink as it approaches the reference is not measured by this "
-                    "study (its effect is below the chaos floor, see the table)."))
+                    "study (its effect is below the chaos floor, see the table).", kind="self-consistency"))
         return out
 
     def tables(self, run, p):
