@@ -9,116 +9,131 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 
+# What a check's reference is, and so what its pass means (issue 18):
+#   source            a number or statement printed in a source (thesis, C&S) for this very quantity
+#   exact             an analytic or independently computed exact solution of the same model
+#   cross-code        another code (YADE, LIGGGHTS) on the same scene
+#   self-consistency  an identity, a convergence or equilibrium property of demflow's own results
+#   calibration       a lost parameter was fitted to this very figure: its agreement is not validation
+#   info              shown for comparison, never pass/fail
+KINDS = ("source", "exact", "cross-code", "self-consistency", "calibration", "info")
+VALIDATION_KINDS = ("source", "exact", "cross-code", "self-consistency")  # passes that count as validation
+
+
 @dataclass(frozen=True)
 class Tolerance:
+    """A check's tolerance: ``value`` (relative unless ``absolute``, in the checked quantity's
+    units then), why it is what it is, and the ``kind`` of check it serves (:data:`KINDS`)."""
+
     value: float  # relative unless `absolute`
     why: str
     absolute: bool = False
+    kind: str = ""
 
 
 TOLERANCES = {
     "one-disc.final-force": Tolerance(
         1e-4,
         "Table 2.1 (thesis §2.2.5.1) prints the final force to 7 digits; the acceptance asks 0.01 %. "
-        "The eq 2.27 scheme at Δt = 1 ms reproduces the thesis's 72703.36 N to 0.002 % (measured)."),
+        "The eq 2.27 scheme at Δt = 1 ms reproduces the thesis's 72703.36 N to 0.002 % (measured).", kind="source"),
     "one-disc.undamped-peak": Tolerance(
         1e-3,
         "An undamped linear oscillator released at zero overlap swings between 0 and 2W exactly; "
-        "central differences at ωΔt = 0.036 change the amplitude by O((ωΔt)²) ≈ 1e-4 (measured 6e-5)."),
+        "central differences at ωΔt = 0.036 change the amplitude by O((ωΔt)²) ≈ 1e-4 (measured 6e-5).", kind="exact"),
     "five-discs.deformed-statics": Tolerance(
         5e-3,
         "Acceptance of issue 2 (0.5 %; the thesis had up to 4.2 % against rigid statics). Checked against the "
-        "statics of the final configuration (contact normals as the run ends), which is statically determinate."),
+        "statics of the final configuration (contact normals as the run ends), which is statically determinate.", kind="exact"),
     "five-discs.rigid-statics-stiff": Tolerance(
         5e-3,
         "Acceptance 0.5 % against the rigid reconstructed geometry, reached once overlaps are small: the "
-        "stiffness study (kN = 1e7, 1e8, 1e9) measured 4.2 %, 0.39 %, 0.035 %, i.e. error ∝ 1/kN."),
+        "stiffness study (kN = 1e7, 1e8, 1e9) measured 4.2 %, 0.39 %, 0.035 %, i.e. error ∝ 1/kN.", kind="exact"),
     "five-discs.thesis-predicted": Tolerance(
         1e-4,
         "Same algorithm and data as the thesis: its printed 'predicted' forces (Tables 2.2, 2.3, 6-7 digits) "
-        "are reproduced to ≤ 5e-5 (measured); 1e-4 allows for the unknown Δt the thesis used."),
+        "are reproduced to ≤ 5e-5 (measured); 1e-4 allows for the unknown Δt the thesis used.", kind="source"),
     "five-discs.weight-balance": Tolerance(
-        1e-4, "Acceptance of issue 2: wall reactions sum to the total weight within 1e-4 (Table 2.3 text)."),
+        1e-4, "Acceptance of issue 2: wall reactions sum to the total weight within 1e-4 (Table 2.3 text).", kind="self-consistency"),
     "impact.velocities": Tolerance(
         1e-3,
         "Acceptance of issue 2 (0.1 %), against the exact solution of the linear-spring contact (central-force "
         "scattering, integrated to 1e-12); the rigid-body values differ from it by 0.32 % at kN = 1e7 because the "
-        "contact normal turns during the 1.2 ms contact (shown by the stiffness study)."),
+        "contact normal turns during the 1.2 ms contact (shown by the stiffness study).", kind="exact"),
     "nine-disc.damping-independence": Tolerance(
         5e-3, "Acceptance of issue 2: the equilibrium force at C does not depend on damping (≤ 0.5 %); "
-              "C&S Fig. 6 text: 'damping does not affect the equilibrium value'."),
+              "C&S Fig. 6 text: 'damping does not affect the equilibrium value'.", kind="self-consistency"),
     "engines.equilibrium": Tolerance(
         1e-2, "Acceptance of issue 5: where the models are equivalent the equilibrium force at C agrees within 1 % "
-              "between demflow, YADE and LIGGGHTS."),
+              "between demflow, YADE and LIGGGHTS.", kind="cross-code"),
     "engines.matching-mode": Tolerance(
         1e-6, "Same model, same Δt, same operations up to floating-point order: measured ≤ 5e-11 (YADE, LIGGGHTS) over "
               "3000+ cycles; 1e-6 leaves room for round-off growth. The Δt study (Δt/2) moves the undamped history by "
-              "19 % (oscillation phase), so 1e-6 only passes when the engines compute the same model.", absolute=True),
+              "19 % (oscillation phase), so 1e-6 only passes when the engines compute the same model.", absolute=True, kind="cross-code"),
     "bem.moving-planes": Tolerance(
         0.02, "Acceptance of issue 3: T/μU within 2 % of 98.8 (Bézine & Bonneau) and 99.4 (Bouard), thesis §4.4.2, "
-              "inferred channel width 4R."),
+              "inferred channel width 4R.", kind="calibration"),
     "bem.free-rectangle": Tolerance(
         0.005, "Acceptance of issue 3: U_p/U within 0.5 % of 1.3041 (Bézine & Bonneau, thesis §4.4.3), inferred "
-               "square particle a × a."),
+               "square particle a × a.", kind="calibration"),
     "bem.symmetry": Tolerance(
         1e-9, "Symmetric mesh and data: transverse force and moment vanish to round-off (measured ≤ 1e-13 of the drag).",
-        absolute=True),
+        absolute=True, kind="self-consistency"),
     "bem.mesh-converged": Tolerance(
-        2e-3, "Richardson estimate of the remaining discretisation error of a case's finest mesh (measured ≤ 7e-4, O(h²))."),
+        2e-3, "Richardson estimate of the remaining discretisation error of a case's finest mesh (measured ≤ 7e-4, O(h²)).", kind="self-consistency"),
     "photoelastic.equilibrium": Tolerance(
         0.03, "Acceptance of issue 6: ΔF/F (largest resultant force on a disc / largest contact force, C&S Table 1 "
-              "note 2) below 3 % at each stage; C&S had 0.1-2.6 %.", absolute=True),
+              "note 2) below 3 % at each stage; C&S had 0.1-2.6 %.", absolute=True, kind="self-consistency"),
     "photoelastic.servo-hold": Tolerance(
-        0.01, "Acceptance of issue 6: the servo walls hold the experiment's F_H/F_V (0.39; stage B 0.3322) within 1 %."),
+        0.01, "Acceptance of issue 6: the servo walls hold the experiment's F_H/F_V (0.39; stage B 0.3322) within 1 %.", kind="self-consistency"),
     "falling-disc.terminal": Tolerance(
         1e-2, "Acceptance of issue 4 (terminal velocity within 1 %), applied to eq 5.6 with Faxén's drag: Takaisi's "
               "O((r/b)²) drag (the issue's −0.9535) is 2.4 % below Faxén's series, which the BEM converges to "
-              "(K/μ = 16.470, 16.517, 16.529 for 32, 64, 128 elements per disc vs 16.533)."),
+              "(K/μ = 16.470, 16.517, 16.529 for 32, 64, 128 elements per disc vs 16.533).", kind="exact"),
     "falling-disc.history": Tolerance(
         3e-2, "Explicit lagged drag, first order: the largest deviation from eq 5.3 is the start, ½Δt/τ "
               "(v_{-1/2} = 0, τ = m/K = 1.9 ms): measured 2.66 % at Δt = 1e-4 s and 1.32 % at Δt = 5e-5 s "
               "(the order is checked separately); 3 % is the Δt = 1e-4 s value with the measured 13 % margin for "
-              "the mesh (K at 64 vs 128 elements)."),
+              "the mesh (K at 64 vs 128 elements).", kind="exact"),
     "falling-disc.order": Tolerance(
         0.3, "Δt study: a first-order scheme halves its error with Δt (ratio 2). 0.3 separates "
-             "first order from second (ratio 4) and from no convergence (ratio 1). Measured 2.013.", absolute=True),
+             "first order from second (ratio 4) and from no convergence (ratio 1). Measured 2.013.", absolute=True, kind="self-consistency"),
     "liquefaction.contacts-broken": Tolerance(
         1e-2, "Thesis §5.3.3 / Fig. 5.11: all contacts broken by γ = 0.7 %. Measured F_C(wall 3) = 0 from γ = 0.54 % "
               "on (offset 0.5 L); a column still standing carries ~0.5 F_y at γ = 0.35 %: 1 % of F_y separates them.",
-        absolute=True),
+        absolute=True, kind="source"),
     "liquefaction.pore-pressure": Tolerance(
         5e-3, "Mean BEM pressure on wall 1 vs F_y/L once the contacts are broken: measured 1.9e-4 (64 elements per disc); "
               "the mesh study (32, 64, 128 elements, γ = 0.35 %) moves the wall-1 mean by ≤ 1.3e-3 (lubrication peak "
-              "under disc A at the 0.05 L gap is not resolved), so 5e-3 bounds the discretisation with margin."),
+              "under disc A at the 0.05 L gap is not resolved), so 5e-3 bounds the discretisation with margin.", kind="exact"),
     "liquefaction.uniform": Tolerance(
         3e-3, "Incompressibility (thesis Fig. 5.12b): the four walls' mean pressures agree to 5.7e-4 (64 elements) and "
               "1.6e-3 (128 elements, bottom mean moved by the unresolved gap under disc A); along walls 2 and 4 "
               "(no disc near) (max − min)/mean ≤ 4.7e-4 at 32, 64 and 128 elements. Pointwise uniformity along wall 1 is "
-              "not checked: 2-41 % local peak under disc A, not mesh-converged (1.6 %, 13 %, 7.6 %).", absolute=True),
+              "not checked: 2-41 % local peak under disc A, not mesh-converged (1.6 %, 13 %, 7.6 %).", absolute=True, kind="self-consistency"),
     "liquefaction.load-transfer": Tolerance(
         1e-9, "Thesis §5.3.2: the fluid force on the loaded wall (BEM traction integrated over the side) plus the contact "
               "force the solve saw equals F_A: exact up to round-off (measured ≤ 6e-16); a wrong length or sign is O(1).",
-        absolute=True),
+        absolute=True, kind="self-consistency"),
     "liquefaction.mesh": Tolerance(
         5e-3, "Mesh study of thesis-liquefaction at γ = 0.35 %: wall-1 mean pressure at 32, 64, 128 elements per disc "
-              "differs by ≤ 1.3e-3 (measured); the same bound as the pressure check."),
+              "differs by ≤ 1.3e-3 (measured); the same bound as the pressure check.", kind="self-consistency"),
     "simple-shear.equilibrium": Tolerance(
         1e-2,
         "Static equilibrium of the wall forces (thesis Figs 5.24, 5.33, 5.41, 5.49). Rate study of the dry shear, seed 1: "
         "rms |Σ F| / F_y over the shear 0.87/0.69/0.33/0.24 % (loose) and 0.13/0.04/0.02/0.01 % (dense) at "
         "γ̇ = 0.2/0.1/0.05/0.02 /s; single slip events reach 6-9 % for a few records (the thesis: 'some oscillations "
-        "between 4 and 7 %'). 1 % rms is three times the loose value at the default γ̇ = 0.05.", absolute=True),
+        "between 4 and 7 %'). 1 % rms is three times the loose value at the default γ̇ = 0.05.", absolute=True, kind="self-consistency"),
     "simple-shear.peak-ratio": Tolerance(
         0.6,
         "'Peak S/F_y of order 0.2' (thesis 0.2 loose, 0.19 dense, from one 20-disc arrangement that is lost). 0.6 "
         "relative accepts 0.08-0.32, within a factor 2.5 of the thesis: the same order, not the same arrangement. Seed "
-        "ensemble (seeds 1-8, both specimens, dry): peaks 0.042-0.176, 14 of 16 inside (report table)."),
+        "ensemble (seeds 1-8, both specimens, dry): peaks 0.042-0.176, 14 of 16 inside (report table).", kind="source"),
     "simple-shear.incompressible": Tolerance(
         1e-2,
         "Walls 1 and 3 of the closed box see the same pore pressure up to the viscous pressure drop (thesis §5.5.4.1: "
         "'quite similar ... the consequence of incompressibility'); median over the solves, in units of F_y/W. "
         "Measured 7e-4 and 1.0e-3 (default settings); thesis-simple-shear-study (loose): 1e-4, 1.1e-3, 5.6e-4 at 8, "
-        "16, 32 elements per disc, and 1.1e-2 for the oscillating stride safety 1.0, which 1 % rejects.", absolute=True),
+        "16, 32 elements per disc, and 1.1e-2 for the oscillating stride safety 1.0, which 1 % rejects.", absolute=True, kind="self-consistency"),
 }
 
 

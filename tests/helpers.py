@@ -1,29 +1,21 @@
 """Small scenes for the property tests."""
 import numpy as np
 
-from demflow import (ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Scene, Wall)
+from demflow import (ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Scene)
+from demflow.cases.fixtures import box_walls as fixtures_box_walls, random_sequential_addition
 
 
 def random_packing(n, seed, rmin=0.5, rmax=1.0, box=None):
-    """Non-overlapping discs placed by rejection in a square box (deterministic for a seed)."""
+    """Non-overlapping discs placed by rejection in a square box (deterministic for a seed); each
+    try draws a radius in [rmin, rmax], then the centre."""
     rng = np.random.default_rng(seed)
     box = box or 3.0 * np.sqrt(n) * rmax
-    xs, ys, rs = [], [], []
-    tries = 0
-    while len(xs) < n and tries < 100000:
-        tries += 1
-        r = rng.uniform(rmin, rmax)
-        x, y = rng.uniform(r, box - r, 2)
-        if all((x - a) ** 2 + (y - b) ** 2 >= (r + c) ** 2 for a, b, c in zip(xs, ys, rs)):
-            xs.append(x); ys.append(y); rs.append(r)
-    return np.array(xs), np.array(ys), np.array(rs), box
+    x, y, r = random_sequential_addition(lambda g: g.uniform(rmin, rmax), (0.0, box, 0.0, box), rng, n=n)
+    return x, y, r, box
 
 
 def box_walls(box, material="wall"):
-    return [Wall("bottom", (0.0, 0.0), (1.0, 0.0), 0.0, box, material),
-            Wall("right", (box, 0.0), (0.0, 1.0), 0.0, box, material),
-            Wall("top", (box, box), (-1.0, 0.0), 0.0, box, material),
-            Wall("left", (0.0, box), (0.0, -1.0), 0.0, box, material)]
+    return fixtures_box_walls(0.0, box, 0.0, box, material=material)
 
 
 def gas_scene(x, y, r, v, om=None, *, ks=0.0, mu=0.0, cn=0.0, dt=None, n_steps=200, walls=(), normal="incremental",

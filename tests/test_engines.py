@@ -55,7 +55,7 @@ def test_fresh_demflow_runs_agree_with_stored_engine_references():
     case = NineDiscEngines()
     p = case.merged()
     results = case.run(p)
-    assert set(results) == set(reference.available(CASE))
+    assert set(results.results) == set(reference.available(CASE))
     checks = case.checks(results, p)
     asserted = [c for c in checks if np.isfinite(c.tolerance)]
     assert len(asserted) >= 2 * 12  # 7 equivalent YADE variants + 5 LIGGGHTS, two checks each

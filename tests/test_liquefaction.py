@@ -15,7 +15,7 @@ def test_liquefaction_passes_every_check(case, tmp_path):
     failed = [c.name for c in case.checks(res, p) if not c.passed]
     assert not failed
     # compressive pressure is positive (demflow.bem): the walls are pushed outward by F_y/L
-    assert case.wall_pressure(res["wet"].pore_pressure)["bottom"][0] > 0.9 * p["Fy"] / p["box"]
+    assert case.wall_pressure(res.results["wet"].pore_pressure)["bottom"][0] > 0.9 * p["Fy"] / p["box"]
     assert case.figures(res, p, str(tmp_path))
 
 
@@ -26,7 +26,7 @@ def test_pore_pressure_follows_the_load_handed_to_the_fluid(case):
     p = case.merged(dict(load_factor=0.5, study="64"))
     res = case.run(p)
     q = p["Fy"] / p["box"]
-    end = case.wall_pressure(res["wet"].pore_pressure)
+    end = case.wall_pressure(res.results["wet"].pore_pressure)
     # measured 0.9 % off (the unresolved gap under disc A weighs more at half the pressure); the point is
     # F_y/2L, not F_y/L (a 100 % difference)
     assert abs(end["bottom"][0] / (0.5 * q) - 1) < 2e-2

@@ -32,8 +32,8 @@ def test_dry_variants_pass_their_checks():
     assert not failed
     # the lid is servo-controlled: the vertical contact force on wall 3 stays near F_y (median deviation
     # measured 1.06 % for seed 1: contact events between servo corrections)
-    c = curves(res["dense-dry"])
-    assert np.median(np.abs(c.F3 / res["dense-dry"].meta["fy"] - 1)) < 0.03
+    c = curves(res.results["dense-dry"])
+    assert np.median(np.abs(c.F3 / res.results["dense-dry"].meta["fy"] - 1)) < 0.03
 
 
 def test_saturated_shear_starts_unloaded_keeps_volume_and_walls_1_3_agree():

@@ -4,7 +4,7 @@
 """
 from __future__ import annotations
 
-from .base import Case, Check
+from .base import Case, CaseRun, Check, ReferencePlan
 from .thesis_one_disc import OneDisc
 from .thesis_five_discs import FiveDiscs
 from .thesis_impact import Impact
@@ -31,3 +31,13 @@ def get_case(name: str) -> Case:
     if name not in CASES:
         raise KeyError(f"unknown case {name!r}; `demflow cases` lists them: {', '.join(CASES)}")
     return CASES[name]
+
+
+def reference_cases() -> dict[str, Case]:
+    """The cases `demflow reference` can make engine reference runs for (a ``reference_plan``)."""
+    return {n: c for n, c in CASES.items() if c.reference_plan() is not None}
+
+
+def comparison_cases() -> dict[str, Case]:
+    """The cases `demflow compare` can compare engines on (a ``comparison_case``)."""
+    return {n: c for n, c in CASES.items() if c.comparison_case() is not None}

@@ -2,22 +2,40 @@
 
 A case is a class with a stable ``name``; its ``params`` (defaults) can be overridden from
 the CLI (``--set key=value``).  ``scenes(p)`` returns the scenes of its variants;
-``run(p)`` runs them (returning :class:`~demflow.results.Results` per variant, plus any
-extra data the checks need); ``checks`` compares with the source's reference values using
-tolerances from :mod:`demflow.tolerances`; ``figures`` draws what a person looks at.
+``run(p)`` runs them and returns a :class:`CaseRun` (the :class:`~demflow.results.Results`
+of each variant, plus any extra data the checks need); ``checks`` compares with the source's
+reference values using tolerances from :mod:`demflow.tolerances` (informative lines are
+:meth:`Check.info`, never counted as passes or failures); ``figures`` draws what a person
+looks at.  Hooks instead of name branches: ``reference_plan`` (``demflow reference``),
+``comparison_case`` (``demflow compare``), ``tables`` and ``page_sections`` (the report page).
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from ..tolerances import tol
+from ..tolerances import KINDS, VALIDATION_KINDS, tol
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from ..results import Results
+    from ..scene import Scene
+
+INFO = "info"  # the kind of an informative line (Check.info)
 
 
 @dataclass
 class Check:
-    """One validation check: value vs reference, within a tolerance from tolerances.py."""
+    """One validation check: value vs reference, within a tolerance from tolerances.py.
+
+    ``kind`` says what the reference is (:data:`demflow.tolerances.KINDS`): a source's figure, an
+    exact solution, another code, a self-consistency identity, a calibration (a lost parameter
+    fitted to this very figure: never counted as validation) or "info" (:meth:`info`): shown on
+    the report with its value, never counted as a pass or a failure.
+    """
 
     name: str
     value: float
@@ -26,26 +44,100 @@ class Check:
     source: str
     why: str
     relative: bool = True
+    kind: str = ""
     passed: bool = field(init=False)
     error: float = field(init=False)
 
     def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ValueError(f"check {self.name!r}: kind {self.kind!r} is not one of {KINDS}; say what its reference "
+                             f"is (demflow/tolerances.py explains each kind)")
         diff = abs(self.value - self.reference)
         self.error = diff / abs(self.reference) if self.relative and self.reference != 0 else diff
         self.passed = bool(math.isfinite(self.error) and self.error <= self.tolerance)
 
     @classmethod
     def against(cls, name, value, reference, tolerance_name, source):
+        """value vs reference within the named tolerance of tolerances.py, whose ``kind`` it takes."""
         t = tol(tolerance_name)
-        return cls(name, float(value), float(reference), t.value, source, t.why, relative=not t.absolute)
+        return cls(name, float(value), float(reference), t.value, source, t.why, relative=not t.absolute, kind=t.kind)
 
     @classmethod
-    def condition(cls, name, ok: bool, value: float, source: str, why: str):
+    def condition(cls, name, ok: bool, value: float, source: str, why: str, *, kind: str):
         """A qualitative check (e.g. 'faster loading gives larger oscillation'): value is reported."""
-        c = cls(name, float(value), float(value), 0.0, source, why, relative=False)
+        c = cls(name, float(value), float(value), 0.0, source, why, relative=False, kind=kind)
         c.passed = bool(ok)
         c.error = 0.0 if ok else math.inf
         return c
+
+    @classmethod
+    def info(cls, name, value, source, why, reference=None):
+        """An informative line (not pass/fail): ``value`` shown beside ``reference`` (same units;
+        without one the value is its own reference), with the relative error; tolerance ∞."""
+        if reference is None:
+            c = cls(name, float(value), float(value), math.inf, source, why, relative=False, kind=INFO)
+        else:
+            c = cls(name, float(value), float(reference), math.inf, source, why, kind=INFO)
+        c.passed = True
+        return c
+
+    @property
+    def informative(self) -> bool:
+        return self.kind == INFO
+
+
+def kind_of(check) -> str:
+    """The kind of a Check or of its summary dict; a summary written before kinds existed marks an
+    informative line by its infinite (or null) tolerance and leaves the others "unclassified"."""
+    if isinstance(check, dict):
+        return check.get("kind") or (INFO if check["tolerance"] in (math.inf, None) else "unclassified")
+    return check.kind
+
+
+def kind_counts(checks) -> dict[str, dict[str, int]]:
+    """{kind: {"passed": n, "total": m}} over Check objects or their summary dicts, in KINDS order."""
+    out = {}
+    for c in checks:
+        k = kind_of(c)
+        row = out.setdefault(k, {"passed": 0, "total": 0})
+        row["total"] += 1
+        row["passed"] += bool(c["passed"] if isinstance(c, dict) else c.passed)
+    order = list(KINDS) + sorted(set(out) - set(KINDS))
+    return {k: out[k] for k in order if k in out}
+
+
+def validation_passes(checks) -> tuple[int, int]:
+    """(passed, total) over the checks that count as validation (not calibration, not info)."""
+    vc = [c for c in checks if kind_of(c) in VALIDATION_KINDS]
+    return sum(bool(c["passed"] if isinstance(c, dict) else c.passed) for c in vc), len(vc)
+
+
+def counted(checks) -> list:
+    """The pass/fail checks of a list (the informative lines left out): Check objects or their
+    summary dicts."""
+    return [c for c in checks if kind_of(c) != INFO]
+
+
+@dataclass
+class CaseRun:
+    """What a case's run returns: ``results`` maps a variant's name to its result tables (the
+    CLI saves each under runs/CASE/VARIANT); ``extras`` holds whatever else the checks and
+    figures need (packings, statistics, BEM solutions, engine rows), by name."""
+
+    results: dict[str, Results] = field(default_factory=dict)
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ReferencePlan:
+    """How ``demflow reference CASE`` makes a case's engine reference runs: the case name the runs
+    are stored under (reference_runs/STORE/), the parameters, the variants an engine can run
+    (engine name → variant names) and the scene of a variant (variant, parameters → Scene)."""
+
+    store: str
+    params: dict[str, Any]
+    variants: Callable[[str], tuple[str, ...]]
+    scene: Callable[[str, dict], Scene]
 
 
 class Case:
@@ -69,13 +161,32 @@ class Case:
     def scenes(self, p) -> dict:
         raise NotImplementedError
 
-    def run(self, p) -> dict:
+    def run(self, p) -> CaseRun:
         from ..build import build
 
-        return {name: build(scene).run().results() for name, scene in self.scenes(p).items()}
+        return CaseRun({name: build(scene).run().results() for name, scene in self.scenes(p).items()})
 
-    def checks(self, results, p) -> list[Check]:
+    def checks(self, run: CaseRun, p) -> list[Check]:
         return []
 
-    def figures(self, results, p, outdir) -> list[str]:
+    def figures(self, run: CaseRun, p, outdir) -> list[str]:
+        return []
+
+    def tables(self, run: CaseRun, p) -> list[tuple[str, pd.DataFrame]]:
+        """(title, table) pairs shown on the case's report page."""
+        return []
+
+    # -- hooks the CLI and the report look up instead of branching on a case's name
+    def reference_plan(self) -> ReferencePlan | None:
+        """How `demflow reference` makes this case's engine references; None: it has none."""
+        return None
+
+    def comparison_case(self) -> Case | None:
+        """A fresh case object whose ``engines`` and ``live`` the `demflow compare` command sets;
+        None: the case compares no engines."""
+        return None
+
+    @staticmethod
+    def page_sections() -> list[tuple[str, str]]:
+        """(title, HTML) sections added to the case's report page after its checks."""
         return []

@@ -45,7 +45,7 @@ from ..analysis import forces as fstat
 from ..analysis.micro import coordination_number, fabric_tensor
 from ..plotting import contact_force_diagram, save_figure
 from ..scene import ContactModel, Discs, LinearLaw, Material, Outputs, Phase, Scene, Servo
-from .base import Case, Check
+from .base import Case, CaseRun, Check, ReferencePlan
 from .photoelastic_packing import DENSITY, INWARD, KN, WALLS, box_walls, min_mass, random_packing, ref_mass
 
 SRC = "C&S (1979) verification test, Tables 1-3"
@@ -240,7 +240,13 @@ class Photoelastic(Case):
         out["engines"] = self._engines(p, pk)
         out["engine_stats"] = {e: {st: stage_statistics(res, s, len(pk.x)) for st, s in (("A", a), ("B", b))}
                                for e, res in out["engines"].items()}
-        return out
+        return CaseRun({k: out.pop(k) for k in ("demflow", "servo")}, out)
+
+    def reference_plan(self):
+        return ReferencePlan(self.name, self.merged(), reference_variants, reference_scene)
+
+    def comparison_case(self):
+        return Photoelastic()
 
     # -- engines
     def _engines(self, p, pk):
@@ -264,60 +270,58 @@ class Photoelastic(Case):
                 out[e] = res
         return out
 
-    def checks(self, results, p):
+    def checks(self, run, p):
         out = []
         src = SRC
         # strain-controlled, every seed
-        for seed, st in results["seeds"].items():
+        for seed, st in run.extras["seeds"].items():
             for stage, (lo, hi) in (("A", (0.39, 0.46)), ("B", (0.33, 0.47))):
                 r = st[stage]["F_H/F_V"]
                 out.append(Check.condition(f"table1 seed {seed}, stage {stage}: F_H/F_V in [{lo}, {hi}] "
                                            f"(experiment to C&S numerics)", lo <= r <= hi, r, src,
-                                           "Acceptance: the range from the experiment to C&S's numerical ratios"))
+                                           "Acceptance: the range from the experiment to C&S's numerical ratios", kind="source"))
                 out.append(Check.against(f"table1 seed {seed}, stage {stage}: ΔF/F below 3 %", st[stage]["ΔF/F"], 0.0,
                                          "photoelastic.equilibrium", src))
         for t in ("table2", "table3"):
             for stage in ("A", "B"):
-                r = results["tables"][t][stage]["F_H/F_V"]
-                ch = Check.condition(f"{t} seed {p['seed']}, stage {stage}: F_H/F_V (C&S {CS_RATIOS[t]['AB'.index(stage)]})",
-                                     True, r, src, "Information: C&S's ratio for this parameter set, other packing")
-                ch.tolerance = float("inf")
-                out.append(ch)
+                r = run.extras["tables"][t][stage]["F_H/F_V"]
+                out.append(Check.info(f"{t} seed {p['seed']}, stage {stage}: F_H/F_V (C&S {CS_RATIOS[t]['AB'.index(stage)]})",
+                                      r, src, "Information: C&S's ratio for this parameter set, other packing"))
         # stress-controlled
-        sv = results["servo"].wall_forces
+        sv = run.results["servo"].wall_forces
         sa = p["servo_cycles"]
         targets = {"A": EXPERIMENT[0], "B": (EXPERIMENT[0] - STEP_B) / (1 + STEP_B)}
         for stage, (s0, s1) in (("A", (0.75 * sa, sa)), ("B", (1.75 * sa, 2 * sa))):
             out.append(Check.against(f"servo, stage {stage}: F_H/F_V held at {targets[stage]:.4f} "
                                      "(mean over the stage's last quarter)", servo_ratio(sv, s0, s1), targets[stage],
                                      "photoelastic.servo-hold", src + "; experiment's forces"))
-            out.append(Check.against(f"servo, stage {stage}: ΔF/F below 3 %", results["servo_stats"][stage]["ΔF/F"], 0.0,
+            out.append(Check.against(f"servo, stage {stage}: ΔF/F below 3 %", run.extras["servo_stats"][stage]["ΔF/F"], 0.0,
                                      "photoelastic.equilibrium", src))
         # engines vs demflow, judged against the seed band
-        bands = seed_bands(results)
-        ref = results["seeds"][p["seed"]]
-        for e, per_stage in results["engine_stats"].items():
+        bands = seed_bands(run)
+        ref = run.extras["seeds"][p["seed"]]
+        for e, per_stage in run.extras["engine_stats"].items():
             for stage, st in per_stage.items():
                 ks = stats.ks_2samp(ref[stage]["f"], st["f"])
                 out.append(Check.condition(f"{e} vs demflow, stage {stage}: two-sample KS on f = F/<F> does not reject "
                                            f"at 5 % (p = {ks.pvalue:.3g})", ks.pvalue >= 0.05, ks.pvalue, src,
-                                           "Acceptance: same packing and protocol; the KS p-value must be ≥ 0.05"))
+                                           "Acceptance: same packing and protocol; the KS p-value must be ≥ 0.05", kind="cross-code"))
                 lo, hi = bands[stage]["q-model N"]
                 N = st["q-model N"]
                 out.append(Check.condition(f"{e}, stage {stage}: q-model N = {N:.3g} inside demflow's seed band "
                                            f"[{lo:.3g}, {hi:.3g}]", lo <= N <= hi, N, src,
-                                           "Acceptance: engine difference judged against the seed-to-seed band"))
+                                           "Acceptance: engine difference judged against the seed-to-seed band", kind="cross-code"))
         return out
 
-    def tables(self, results, p):
+    def tables(self, run, p):
         """The statistics table with bands (report page)."""
         return [(f"Stage {stage}: statistics, demflow seed band vs engines (same packing, seed {p['seed']})",
-                 statistics_table(results, p, stage)) for stage in ("A", "B")] + [
-            (f"Stage {stage}: wall forces (C&S Tables 1-3 quantities), seed {p['seed']}", wall_forces_table(results, p, stage))
+                 statistics_table(run, p, stage)) for stage in ("A", "B")] + [
+            (f"Stage {stage}: wall forces (C&S Tables 1-3 quantities), seed {p['seed']}", wall_forces_table(run, p, stage))
             for stage in ("A", "B")]
 
-    def figures(self, results, p, outdir):
-        return photoelastic_figures(results, p, outdir)
+    def figures(self, run, p, outdir):
+        return photoelastic_figures(run, p, outdir)
 
 
 def reference_variants(engine: str) -> tuple[str, ...]:
@@ -353,32 +357,32 @@ def servo_ratio(wf: pd.DataFrame, s0, s1) -> float:
     return float(np.mean(np.abs(fh)) / np.mean(np.abs(fv)))
 
 
-def seed_bands(results) -> dict:
+def seed_bands(run) -> dict:
     out = {}
     for stage in ("A", "B"):
-        out[stage] = {k: prediction_band([s[stage][k] for s in results["seeds"].values()]) for k in STATS}
+        out[stage] = {k: prediction_band([s[stage][k] for s in run.extras["seeds"].values()]) for k in STATS}
     return out
 
 
-def statistics_table(results, p, stage) -> pd.DataFrame:
-    bands = seed_bands(results)
+def statistics_table(run, p, stage) -> pd.DataFrame:
+    bands = seed_bands(run)
     cols = {}
-    vals = {k: [s[stage][k] for s in results["seeds"].values()] for k in STATS}
+    vals = {k: [s[stage][k] for s in run.extras["seeds"].values()] for k in STATS}
     cols["demflow mean over seeds"] = {k: np.mean(v) for k, v in vals.items()}
     cols["demflow s.d."] = {k: np.std(v, ddof=1) for k, v in vals.items()}
     cols["band low"] = {k: bands[stage][k][0] for k in STATS}
     cols["band high"] = {k: bands[stage][k][1] for k in STATS}
-    cols[f"demflow seed {p['seed']}"] = {k: results["seeds"][p["seed"]][stage][k] for k in STATS}
-    for e, per_stage in results["engine_stats"].items():
+    cols[f"demflow seed {p['seed']}"] = {k: run.extras["seeds"][p["seed"]][stage][k] for k in STATS}
+    for e, per_stage in run.extras["engine_stats"].items():
         cols[e] = {k: per_stage[stage][k] for k in STATS}
     return pd.DataFrame(cols).loc[list(STATS)]
 
 
-def wall_forces_table(results, p, stage) -> pd.DataFrame:
-    frames = {"demflow": results["seeds"][p["seed"]][stage]["walls"]}
-    for e, per_stage in results["engine_stats"].items():
+def wall_forces_table(run, p, stage) -> pd.DataFrame:
+    frames = {"demflow": run.extras["seeds"][p["seed"]][stage]["walls"]}
+    for e, per_stage in run.extras["engine_stats"].items():
         frames[e] = per_stage[stage]["walls"]
-    frames["demflow servo"] = results["servo_stats"][stage]["walls"]
+    frames["demflow servo"] = run.extras["servo_stats"][stage]["walls"]
     return pd.concat(frames, names=["engine"])[["cs_wall", "F1", "F2", "e_rel", "contacts"]]
 
 
@@ -391,12 +395,12 @@ def _diagram(res, step, ax):
     ax.set_ylim(float((q.y - q.radius).min()) - m, float((q.y + q.radius).max()) + m)
 
 
-def photoelastic_figures(results, p, outdir):
+def photoelastic_figures(run, p, outdir):
     import matplotlib.pyplot as plt
 
     paths = []
     a, b = stage_steps(p)
-    runs = {"demflow": results["demflow"], **results["engines"]}
+    runs = {"demflow": run.results["demflow"], **run.extras["engines"]}
     fig, axs = plt.subplots(2, len(runs) + 1, figsize=(4.2 * (len(runs) + 1), 8.4))
     axs = np.atleast_2d(axs)
     for row, (stage, step) in enumerate((("A", a), ("B", b))):
@@ -404,7 +408,7 @@ def photoelastic_figures(results, p, outdir):
             _diagram(res, step, axs[row, col])
             r = force_ratio(wall_table(res.contacts[res.contacts.step == step]))
             axs[row, col].set_title(f"{e}, stage {stage}: F_H/F_V = {r:.3f}", fontsize=9)
-        sv = results["servo"]
+        sv = run.results["servo"]
         s = p["servo_cycles"] * (1 if stage == "A" else 2)
         _diagram(sv, s, axs[row, -1])
         w = wall_table(sv.contacts[sv.contacts.step == s])
@@ -413,7 +417,7 @@ def photoelastic_figures(results, p, outdir):
     paths.append(save_figure(fig, f"{outdir}/force_plots.png", dpi=90))
 
     # PDFs with fits, linear and log
-    bands = seed_bands(results)
+    bands = seed_bands(run)
     fig, axs = plt.subplots(2, 2, figsize=(11, 8))
     for row, (stage, step) in enumerate((("A", a), ("B", b))):
         for col, scale in enumerate(("linear", "log")):
@@ -423,7 +427,7 @@ def photoelastic_figures(results, p, outdir):
                 pdf = fstat.force_pdf(f, bins="linear" if scale == "linear" else "log")
                 k = pdf.density > 0  # empty bins are not drawn (log axes)
                 ax.plot(pdf.centers[k], pdf.density[k], "o-" if e == "demflow" else "s--", ms=3, lw=1, label=e)
-            f = results["seeds"][p["seed"]][stage]["f"]
+            f = run.extras["seeds"][p["seed"]][stage]["f"]
             x = np.linspace(1e-3, max(f.max(), 4), 300)
             q = fstat.fit_q_model(f)
             ax.plot(x, fstat.q_model_pdf(x, q.N), "k-", lw=1, label=f"q-model N = {q.N:.2f}")
@@ -443,7 +447,7 @@ def photoelastic_figures(results, p, outdir):
     paths.append(save_figure(fig, f"{outdir}/force_pdfs.png", dpi=90))
 
     # servo histories
-    wf = results["servo"].wall_forces
+    wf = run.results["servo"].wall_forces
     fig, ax = plt.subplots(figsize=(8, 3.5))
     top = wf[wf.wall == "top"]
     right = wf[wf.wall == "right"]
@@ -460,8 +464,8 @@ def photoelastic_figures(results, p, outdir):
     # seed scatter of the ratio
     fig, ax = plt.subplots(figsize=(6, 3.5))
     for stage, m in (("A", "o"), ("B", "s")):
-        r = [s[stage]["F_H/F_V"] for s in results["seeds"].values()]
-        ax.plot(list(results["seeds"]), r, m, label=f"stage {stage}")
+        r = [s[stage]["F_H/F_V"] for s in run.extras["seeds"].values()]
+        ax.plot(list(run.extras["seeds"]), r, m, label=f"stage {stage}")
     ax.axhspan(0.39, 0.46, color="C0", alpha=0.1)
     ax.axhspan(0.33, 0.47, color="C1", alpha=0.1)
     ax.set_xlabel("packing seed")

@@ -30,12 +30,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Discs, LinearLaw, Material, Outputs, Phase, Scene, Servo, Wall
+from ..scene import Discs, LinearLaw, Material, Outputs, Phase, Scene, Servo
+from . import fixtures
+from .fixtures import WALLS  # C&S walls 1-4 (inferred from the signs of Tables 1-3)
 
 SIZES = ((40.0, 6), (35.0, 7), (30.0, 16), (25.0, 33), (20.0, 33), (18.0, 36), (15.0, 28), (10.0, 38))
 DENSITY = 2000.0
 KN = 1.5e9
-WALLS = ("bottom", "right", "top", "left")  # C&S walls 1-4 (inferred from the signs of Tables 1-3)
 INWARD = {"bottom": (0.0, 1.0), "right": (-1.0, 0.0), "top": (0.0, -1.0), "left": (1.0, 0.0)}
 
 
@@ -74,32 +75,17 @@ class Packing:
 def random_sequential_addition(r, phi, rng):
     """Place discs of radii ``r`` (in the given order) without overlap in a square box.
 
-    Returns x, y and the box side L with πΣr²/L² = phi.
+    Returns x, y and the box side L [length] with πΣr²/L² = phi (:func:`.fixtures.random_sequential_addition`).
     """
     L = float(np.sqrt(np.pi * np.sum(r * r) / phi))
-    x = np.empty(len(r))
-    y = np.empty(len(r))
-    for i, ri in enumerate(r):
-        for _ in range(100_000):
-            xi, yi = rng.uniform(ri, L - ri, size=2)
-            if i == 0 or np.all((x[:i] - xi) ** 2 + (y[:i] - yi) ** 2 >= (r[:i] + ri) ** 2):
-                break
-        else:
-            raise RuntimeError(f"random sequential addition failed to place disc {i} (R={ri}) at phi={phi}; lower phi")
-        x[i], y[i] = xi, yi
+    x, y, _ = fixtures.random_sequential_addition(r, (0.0, L, 0.0, L), rng)
     return x, y, L
 
 
 def box_walls(x0, x1, y0, y1, material="wall", phases=None, servos=None):
     """Four walls (C&S 1-4: bottom, right, top, left) long enough to close the box at any stage."""
-    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
-    h = 1.5 * max(x1 - x0, y1 - y0)
-    geo = {"bottom": ((cx, y0), (1.0, 0.0)), "right": ((x1, cy), (0.0, 1.0)),
-           "top": ((cx, y1), (1.0, 0.0)), "left": ((x0, cy), (0.0, 1.0))}
-    phases = phases or {}
-    servos = servos or {}
-    return [Wall(w, geo[w][0], geo[w][1], -h, h, material, phases=tuple(phases.get(w, ())), servo=servos.get(w))
-            for w in WALLS]
+    return fixtures.box_walls(x0, x1, y0, y1, half_length=1.5 * max(x1 - x0, y1 - y0), counter_clockwise=False,
+                              material=material, phases=phases, servos=servos)
 
 
 def random_packing(seed: int, *, phi_rsa: float = 0.5, phi_approach: float = 0.80, approach_speed: float = 1.0,

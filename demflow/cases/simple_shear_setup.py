@@ -36,7 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Discs, LinearLaw, Material, Outputs, Phase, Scene, Servo, Wall
+from ..scene import Discs, LinearLaw, Material, Outputs, Phase, Scene, Servo
+from . import fixtures
 from .shear_box import hinged_shear_phases
 
 SIZES = ((3, 0.15), (6, 0.10), (11, 0.05))  # (count, radius [cm]), thesis Table 5.1
@@ -47,7 +48,6 @@ PHI_DD, PHI_DW = 22.0, 10.0  # friction angles [deg]
 RHO_S, RHO_L, MU = 2.0, 1.0, 0.01  # g/cm³ (unit thickness: g/cm²), g/(cm·s)
 FY = 8.1e3  # applied vertical force on wall 3 [force]: 8.1 kgF in the thesis's force unit
 WIDTH = 0.89  # compressed width [cm]
-WALLS = ("bottom", "right", "top", "left")  # thesis walls 1-4, counter-clockwise around the fluid
 
 
 def radii() -> np.ndarray:
@@ -71,23 +71,12 @@ def damping_ratio_mean() -> float:
 
 
 def initial_discs(seed: int):
-    """Seeded random sequential addition of the 20 discs (largest first) in the 1 × 0.8 cm box."""
-    rng = np.random.default_rng(seed)
-    r = radii()
-    x, y = np.empty(r.size), np.empty(r.size)
+    """Seeded random sequential addition of the 20 discs (largest first) in the 1 × 0.8 cm box; an
+    arrangement can jam (area fraction 0.61): it starts again, same stream, up to 1000 times."""
     W, H = BOX
-    for _attempt in range(1000):  # an arrangement can jam (area fraction 0.61): start again, same stream
-        for i, ri in enumerate(r):
-            for _ in range(20_000):
-                xi, yi = rng.uniform(ri, W - ri), rng.uniform(ri, H - ri)
-                if i == 0 or np.all((x[:i] - xi) ** 2 + (y[:i] - yi) ** 2 >= (r[:i] + ri + 1e-6) ** 2):
-                    break
-            else:
-                break
-            x[i], y[i] = xi, yi
-        else:
-            return x, y, r
-    raise RuntimeError(f"could not place the 20 discs in the 1 × 0.8 cm box with seed {seed}")
+    x, y, r = fixtures.random_sequential_addition(radii(), (0.0, W, 0.0, H), np.random.default_rng(seed), gap=1e-6,
+                                                  tries=20_000, restarts=999)
+    return x, y, r
 
 
 def laws(friction: bool) -> dict:
@@ -99,13 +88,7 @@ def laws(friction: bool) -> dict:
 
 def box_walls(x0, x1, y0, y1, phases=None, servos=None):
     """Walls 1-4 (bottom, right, top, left), counter-clockwise, long enough for the whole protocol."""
-    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
-    h = 1.0
-    geo = {"bottom": ((cx, y0), (1.0, 0.0)), "right": ((x1, cy), (0.0, 1.0)),
-           "top": ((cx, y1), (-1.0, 0.0)), "left": ((x0, cy), (0.0, -1.0))}
-    phases, servos = phases or {}, servos or {}
-    return [Wall(w, geo[w][0], geo[w][1], -h, h, "wall", phases=tuple(phases.get(w, ())), servo=servos.get(w))
-            for w in WALLS]
+    return fixtures.box_walls(x0, x1, y0, y1, half_length=1.0, phases=phases, servos=servos)
 
 
 @dataclass
@@ -161,10 +144,8 @@ def compress(kind: str, seed: int, *, speed: float = 0.05, relax_time: float = 0
     sim = build(scene(f"simple-shear-{kind}-compression", x, y, r, box_walls(0, W, 0, H, phases), friction,
                       density_scale, dt=dt, n_steps=n_max))
     top = sim.wall_names.index("top")
-    while sim.step < n_max and sim.wall_force[top, 1] < FY:
-        sim.run(chunk)
-    if sim.wall_force[top, 1] < FY:
-        raise RuntimeError(f"compression of seed {seed} did not reach F_y = {FY} on wall 3")
+    fixtures.run_until(sim, lambda s: s.wall_force[top, 1] >= FY, max_step=n_max, chunk=chunk,
+                       what=f"compression of seed {seed}: the force on wall 3 reaching F_y = {FY}")
     P = dict(zip(sim.wall_names, zip(sim.wpx, sim.wpy)))
     box = (float(P["left"][0]), float(P["right"][0]), float(P["bottom"][1]), float(P["top"][1]))
     servos = {"top": Servo(FY, (0.0, -1.0), gain, v_max)} if kind == "dense" else {}

@@ -128,7 +128,8 @@ class FiveDiscs(Case):
                                     float(np.tan(np.radians(15.0))), p["dt"], p["t_end"]),
         }
 
-    def checks(self, results, p):
+    def checks(self, run, p):
+        results = run.results
         out = []
         c = results["frictionless"].contacts
         rows = [contact_row(c, a, b) for _, a, b in CONTACTS]
@@ -163,7 +164,8 @@ class FiveDiscs(Case):
                                  "five-discs.weight-balance", SRC3))
         return out
 
-    def figures(self, results, p, outdir):
+    def figures(self, run, p, outdir):
+        results = run.results
         from ..plotting import contact_force_diagram
         import matplotlib.pyplot as plt
 

@@ -61,7 +61,8 @@ class OneDisc(Case):
         w = res.wall("plate")
         return -w.fy.to_numpy(), w.time.to_numpy()
 
-    def checks(self, results, p):
+    def checks(self, run, p):
+        results = run.results
         out = []
         for name, ref in REFERENCE.items():
             f, _ = self.plate_force(results[name])
@@ -71,7 +72,8 @@ class OneDisc(Case):
                                  "one-disc.undamped-peak", "damped-oscillator solution (thesis eq 2.39, C = 0)"))
         return out
 
-    def figures(self, results, p, outdir):
+    def figures(self, run, p, outdir):
+        results = run.results
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(7, 4))

@@ -22,7 +22,7 @@ import pandas as pd
 from ..build import build
 from ..plotting import contact_force_diagram, save_figure
 from . import simple_shear_setup as setup
-from .base import Case, Check
+from .base import Case, CaseRun, Check
 
 SRC = "thesis §5.4-5.6, Figs 5.15-5.49"
 VARIANTS = ("loose-dry", "dense-dry", "loose-saturated", "dense-saturated")
@@ -161,8 +161,7 @@ class SimpleShear(Case):
             kind, state = v.split("-")
             out[v] = run_variant(specs[kind], state == "saturated", p)
         done = {(int(p["seed"]), kind): (specs[kind], out[f"{kind}-dry"]) for kind in specs if f"{kind}-dry" in out}
-        self._ensemble = self.ensemble(p, done) if p["ensemble"] else None
-        return out
+        return CaseRun(out, {"ensemble": self.ensemble(p, done) if p["ensemble"] else None})
 
     @staticmethod
     def ensemble(p, done=None) -> pd.DataFrame:
@@ -184,7 +183,8 @@ class SimpleShear(Case):
                                  **b))
         return pd.DataFrame(rows)
 
-    def checks(self, results, p):
+    def checks(self, run, p):
+        results = run.results
         out = []
         for v, res in results.items():
             kind, state = v.split("-")
@@ -197,14 +197,14 @@ class SimpleShear(Case):
                     out.append(Check.condition(
                         "loose-dry contracts throughout: largest height change [% of H] <= 0.02", b["dh_max"] <= 0.02 and
                         b["dh_min"] < 0, b["dh_max"], SRC, "Thesis Fig. 5.23: 'the array is always compressing'; 0.02 % "
-                        "of H is the servo lid's noise (its height wanders by ±0.01 % at rest)."))
+                        "of H is the servo lid's noise (its height wanders by ±0.01 % at rest).", kind="source"))
                 else:
                     out.append(Check.condition(
                         "dense-dry contracts then dilates: final − smallest height change [% of H] > 0.2, minimum "
                         f"{b['dh_min']:.3f} % at γ = {100 * b['gamma_min']:.2f} %",
                         b["dh_min"] < -0.02 and b["gamma_min"] < 0.9 * p["gamma_max"] and b["dh_end"] > b["dh_min"] + 0.2,
                         b["dh_end"] - b["dh_min"], SRC, "Thesis Fig. 5.40: 'the volume initially decreases before starting "
-                        "to increase steadily'; 0.2 % of H is 10× the servo lid's noise."))
+                        "to increase steadily'; 0.2 % of H is 10× the servo lid's noise.", kind="source"))
                 out.append(Check.against(f"{v}: peak S/F_y (thesis {0.2 if kind == 'loose' else 0.19})", b["peak_S"],
                                          0.2 if kind == "loose" else 0.19, "simple-shear.peak-ratio", SRC))
             else:
@@ -213,19 +213,20 @@ class SimpleShear(Case):
                     out.append(Check.condition(
                         "loose-saturated: pore pressure rises (largest mean p on walls 1, 3 − start, in units of F_y/W, "
                         "> 0.1)", b["p_max"] - b["p_start"] > 0.1 and b["p_end"] > b["p_start"], b["p_max"] - b["p_start"],
-                        SRC, "Thesis Fig. 5.32: the pore pressure increases, sharply near γ ≈ 4 %, then eases."))
+                        SRC, "Thesis Fig. 5.32: the pore pressure increases, sharply near γ ≈ 4 %, then eases.", kind="source"))
                 else:
                     out.append(Check.condition(
                         "dense-saturated: pore pressure rises then drops (peak − start > 0.05 and peak − end > 0.1, "
                         f"F_y/W units; peak at γ = {100 * b['gamma_max']:.2f} %)",
                         b["p_max"] - b["p_start"] > 0.05 and b["p_max"] - b["p_end"] > 0.1
                         and b["gamma_max"] < 0.9 * p["gamma_max"], b["p_max"] - b["p_end"], SRC,
-                        "Thesis Fig. 5.48: 'a steady decrease of pore pressure after an initial increase'."))
+                        "Thesis Fig. 5.48: 'a steady decrease of pore pressure after an initial increase'.", kind="source"))
                 out.append(Check.against(f"{v}: walls 1 and 3 carry the same pore pressure (median |p1 − p3| / (F_y/W))",
                                          b["p13"], 0.0, "simple-shear.incompressible", SRC))
         return out
 
-    def tables(self, results, p):
+    def tables(self, run, p):
+        results = run.results
         rows = []
         thesis = {"loose": (0.89, 0.69, 0.2611), "dense": (0.89, 0.682, 0.2465)}
         for v, res in results.items():
@@ -240,12 +241,13 @@ class SimpleShear(Case):
                              density_scale=m["density_scale"], dt=m["dt"], solves=m["solves"], wall_s=m["wall_s"],
                              dem_s=m["dem_s"], bem_s=m["bem_s"]))
         out = [("Variants (dh in % of H; p in units of F_y/W; times in s on this machine)", pd.DataFrame(rows))]
-        ens = getattr(self, "_ensemble", None)
+        ens = run.extras.get("ensemble")
         if ens is not None and len(ens):
             out.append(("Seed ensemble, dry shear (how much the lost arrangement matters)", ens))
         return out
 
-    def figures(self, results, p, outdir):
+    def figures(self, run, p, outdir):
+        results = run.results
         import matplotlib.pyplot as plt
 
         figs = []

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from . import simple_shear_setup as setup
-from .base import Case, Check
+from .base import Case, CaseRun, Check
 from .thesis_simple_shear import SimpleShear, curves, pressures, run_variant, wet_behaviour
 
 FLOOR = "default, density ×1.0001 (chaos floor; errors vs default)"
@@ -76,9 +76,10 @@ class SimpleShearStudy(Case):
         # moves the history of 20 discs through their slip events, so a knob's error is only
         # meaningful above it
         runs[FLOOR] = dict(base, sat_density_scale=float(base["sat_density_scale"]) * 1.0001)
-        return {k: run_variant(spec, True, q) for k, q in runs.items()}
+        return CaseRun({k: run_variant(spec, True, q) for k, q in runs.items()})
 
-    def table(self, results, p) -> pd.DataFrame:
+    def table(self, run, p) -> pd.DataFrame:
+        results = run.results
         grid = np.linspace(0.0, float(p["gamma_max"]), 400)
         base = {k: (_p_curve(r, grid), _s_curve(r, grid)) for k, r in results.items()
                 if k in ("reference", "default")}
@@ -94,11 +95,12 @@ class SimpleShearStudy(Case):
                              bem_s=m["bem_s"]))
         return pd.DataFrame(rows)
 
-    def checks(self, results, p):
-        t = self.table(results, p).set_index("run")
+    def checks(self, run, p):
+        results = run.results
+        t = self.table(run, p).set_index("run")
         d = t.loc["default"]
         out = [Check.condition("default settings: saturated shear to γ = 10.5 % in ≤ 600 s (value: wall time [s])",
-                               d.wall_s <= 600.0, d.wall_s, SRC, "Issue 4 acceptance: ≤ 10 minutes on this machine.")]
+                               d.wall_s <= 600.0, d.wall_s, SRC, "Issue 4 acceptance: ≤ 10 minutes on this machine.", kind="self-consistency")]
         # convergence, each knob towards the reference (PySDM-style: the error shrinks with resolution)
         for coarse, fine, what in (("density ×100", "density ×30", "density scaling"),
                                    ("8 elements", "16 elements", "elements per disc")):
@@ -108,14 +110,16 @@ class SimpleShearStudy(Case):
                     f"ratio fine/coarse)", t.loc[fine].p_rms_error < t.loc[coarse].p_rms_error,
                     t.loc[fine].p_rms_error / max(t.loc[coarse].p_rms_error, 1e-300), SRC,
                     "A knob whose error does not shrink as it approaches the reference is not measured by this "
-                    "study (its effect is below the chaos floor, see the table)."))
+                    "study (its effect is below the chaos floor, see the table).", kind="self-consistency"))
         return out
 
-    def tables(self, results, p):
+    def tables(self, run, p):
+        results = run.results
         return [("Error vs cost (errors: rms over γ vs the reference; p in F_y/W, S in F_y; times in s)",
-                 self.table(results, p))]
+                 self.table(run, p))]
 
-    def figures(self, results, p, outdir):
+    def figures(self, run, p, outdir):
+        results = run.results
         import matplotlib.pyplot as plt
 
         from ..plotting import save_figure

@@ -19,6 +19,41 @@ import matplotlib
 matplotlib.use("Agg")
 
 from ..cases import CASES  # noqa: E402
+from ..cases.base import INFO, counted, kind_counts, kind_of, validation_passes  # noqa: E402
+
+
+def check_counts(checks) -> str:
+    """"n/m checks pass[, c/d calibrations][, k informative]" for a case's checks (Check objects or
+    summary dicts): n/m counts the validation checks only (source, exact, cross-code,
+    self-consistency); calibrations and informative lines are counted apart."""
+    n, m = validation_passes(checks)
+    counts = kind_counts(checks)
+    text = f"{n}/{m} checks pass"
+    if "calibration" in counts:
+        text += f", {counts['calibration']['passed']}/{counts['calibration']['total']} calibrations"
+    if "unclassified" in counts:
+        text += f", {counts['unclassified']['passed']}/{counts['unclassified']['total']} unclassified"
+    if INFO in counts:
+        text += f", {counts[INFO]['total']} informative"
+    return text
+
+
+def _kind_cell(checks) -> str:
+    """Passes per kind, e.g. "source 3/3 · exact 2/2 · info 4"."""
+    return " · ".join(f"{k} {v['total']}" if k == INFO else f"{k} {v['passed']}/{v['total']}"
+                      for k, v in kind_counts(checks).items())
+
+
+def _strict(obj):
+    """``obj`` with every non-finite float (an informative line's tolerance ∞, a failed condition's
+    error ∞, a NaN) written as null, so that summary.json is strict JSON."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_strict(v) for v in obj]
+    return obj
 
 
 def _atomic_text(path: Path, text: str):
@@ -51,26 +86,29 @@ def run_validation(names=None, outdir="reports/validation", overrides=None, case
         case = cases[name]
         p = case.merged((overrides or {}).get(name))
         t0 = time.perf_counter()
-        results = case.run(p)
+        run = case.run(p)
         wall = time.perf_counter() - t0
-        checks = case.checks(results, p)
+        checks = case.checks(run, p)
         casedir = outdir / name
         casedir.mkdir(parents=True, exist_ok=True)
-        figs = [Path(f).name for f in case.figures(results, p, str(casedir))]
+        figs = [Path(f).name for f in case.figures(run, p, str(casedir))]
         tables = [dict(title=t, html=df.to_html(float_format=lambda v: f"{v:.4g}", border=0))
-                  for t, df in (case.tables(results, p) if hasattr(case, "tables") else [])]
+                  for t, df in case.tables(run, p)]
         summary["cases"][name] = dict(
             run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title, source=case.source,
             params=p, wall_time_s=round(wall, 3), tables=tables,
-            passed=all(c.passed for c in checks), assumptions=list(case.assumptions), figures=figs,
+            passed=all(c.passed for c in counted(checks)), assumptions=list(case.assumptions), figures=figs,
+            counts=kind_counts(checks),
             checks=[dict(name=c.name, value=c.value, reference=c.reference, error=c.error,
                          tolerance=c.tolerance, passed=c.passed, source=c.source, why=c.why,
-                         relative=c.relative) for c in checks])
+                         relative=c.relative, kind=c.kind) for c in checks])
     write_report(summary, outdir)
     return summary
 
 
 def _fmt(v):
+    if v is None:  # a non-finite value in a strict-JSON summary
+        return "—"
     if isinstance(v, float):
         if math.isinf(v):
             return "—"
@@ -92,28 +130,33 @@ def _not_run(summary):
             f"<code>demflow validate --all</code>): {html.escape(', '.join(missing))}</p>")
 
 
+def _mark(ch):
+    """(CSS class, text) of a check's verdict cell."""
+    if kind_of(ch) == INFO:
+        return "small", "info"
+    return ("pass", "pass") if ch["passed"] else ("fail", "FAIL")
+
+
 def write_report(summary, outdir="reports/validation"):
     outdir = Path(outdir)
     rows = []
     for name, c in sorted(summary["cases"].items(), key=lambda kv: list(CASES).index(kv[0])):
-        n_ok = sum(ch["passed"] for ch in c["checks"])
         rows.append(f"<tr><td><a href='{name}/index.html'>{name}</a></td><td>{html.escape(c['title'])}</td>"
-                    f"<td>{html.escape(c['source'])}</td><td>{n_ok}/{len(c['checks'])}</td>"
+                    f"<td>{html.escape(c['source'])}</td><td>{check_counts(c['checks'])}</td>"
+                    f"<td class='small'>{html.escape(_kind_cell(c['checks']))}</td>"
                     f"<td class='{'pass' if c['passed'] else 'fail'}'>{'PASS' if c['passed'] else 'FAIL'}</td>"
                     f"<td>{c['wall_time_s']}</td><td class='small'>{c.get('run_at', summary['generated'])}"
                     f"{' (slow: runs with --all or --case; otherwise kept from its last run)' if c.get('slow') else ''}</td></tr>")
         checks = "".join(
             f"<tr><td>{html.escape(ch['name'])}</td><td>{_fmt(ch['value'])}</td><td>{_fmt(ch['reference'])}</td>"
             f"<td>{_fmt(ch['error'])}</td><td>{_fmt(ch['tolerance'])}</td>"
-            f"<td class='{'pass' if ch['passed'] else 'fail'}'>{'pass' if ch['passed'] else 'FAIL'}</td>"
+            f"<td class='{_mark(ch)[0]}'>{_mark(ch)[1]}</td>"
+            f"<td class='small'>{html.escape(kind_of(ch))}</td>"
             f"<td class='small'>{html.escape(ch['source'])}</td><td class='small'>{html.escape(ch['why'])}</td></tr>"
             for ch in c["checks"])
         assumptions = "".join(f"<li>{html.escape(a)}</li>" for a in c["assumptions"])
-        extra = ""
-        if name == "cs-nine-disc-engines":
-            from ..engines.equivalence import as_html
-
-            extra = f"<h2>Model-equivalence table</h2>{as_html()}"
+        extra = "".join(f"<h2>{html.escape(title)}</h2>{body}"
+                        for title, body in (CASES[name].page_sections() if name in CASES else []))
         for t in c.get("tables", []):  # pandas' to_html escapes the cells
             extra += f"<h2>{html.escape(t['title'])}</h2>{t['html']}"
         figs = "".join(f"<p><img src='{html.escape(f)}'></p>" for f in c["figures"])
@@ -124,17 +167,27 @@ def write_report(summary, outdir="reports/validation"):
                 f"Wall time {c['wall_time_s']} s. Run it: <code>demflow run {name}</code>.</p>"
                 f"<h2>Assumptions (what the sources leave open)</h2><ul>{assumptions}</ul>"
                 f"<h2>Checks</h2><p class='small'>error is relative unless the reference is 0; the tolerance and why "
-                f"come from <code>demflow/tolerances.py</code>; '—' marks an informative row.</p>"
+                f"come from <code>demflow/tolerances.py</code>; 'info' marks an informative row (tolerance '—'), "
+                f"never counted as a pass or a failure: {check_counts(c['checks'])}.</p>"
                 f"<table><tr><th>check</th><th>demflow</th><th>reference</th><th>error</th><th>tolerance</th>"
-                f"<th></th><th>source</th><th>why this tolerance</th></tr>{checks}</table>{extra}<h2>Figures</h2>{figs}"
+                f"<th></th><th>kind</th><th>source</th><th>why this tolerance</th></tr>{checks}</table>{extra}"
+                f"<h2>Figures</h2>{figs}"
                 f"</body></html>")
         _atomic_text(outdir / name / "index.html", page)
     all_ok = all(c["passed"] for c in summary["cases"].values())
+    every = [ch for c in summary["cases"].values() for ch in c["checks"]]
+    summary["counts"] = kind_counts(every)
+    n_val, m_val = validation_passes(every)
+    summary["validation"] = {"passed": n_val, "total": m_val}
     index = (f"<!doctype html><html><head><meta charset='utf-8'><title>demflow validation</title><style>{CSS}</style>"
              f"</head><body><h1>demflow validation report</h1><p>Generated {summary['generated']} "
              f"(Python {summary['python']}, {summary['machine']}). Overall: "
              f"<span class='{'pass' if all_ok else 'fail'}'>{'PASS' if all_ok else 'FAIL'}</span></p>"
-             f"<table><tr><th>case</th><th>what</th><th>source</th><th>checks passed</th><th></th><th>wall time [s]</th>"
+             f"<p>Validation checks passed: {n_val}/{m_val} (source figures, exact solutions, other codes, "
+             f"self-consistency); per kind: {html.escape(_kind_cell(every))}. Calibrations (a lost parameter fitted "
+             f"to the very figure checked) and informative lines are never counted as validation.</p>"
+             f"<table><tr><th>case</th><th>what</th><th>source</th><th>checks passed</th><th>per kind</th><th></th>"
+             f"<th>wall time [s]</th>"
              f"<th>run at</th></tr>{''.join(rows)}</table>{_not_run(summary)}</body></html>")
     _atomic_text(outdir / "index.html", index)
-    _atomic_text(outdir / "summary.json", json.dumps(summary, indent=2, default=str))
+    _atomic_text(outdir / "summary.json", json.dumps(_strict(summary), indent=2, default=str, allow_nan=False))

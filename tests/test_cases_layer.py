@@ -1,0 +1,237 @@
+"""The case layer: shared fixtures, informative checks, hooks instead of name branches, CaseRun."""
+import ast
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import demflow
+from demflow.cases import CASES, Case, CaseRun, Check, comparison_cases, reference_cases
+from demflow.cases.base import counted
+from demflow.cases.fixtures import box_walls, random_sequential_addition, run_until
+
+
+# -- box_walls
+@pytest.mark.parametrize("ccw", [True, False])
+def test_box_walls_close_the_box_exactly_by_default(ccw):
+    ws = box_walls(1.0, 5.0, -2.0, 1.0, counter_clockwise=ccw)
+    assert [w.name for w in ws] == ["bottom", "right", "top", "left"]
+    ends = {}
+    for w in ws:
+        p, e = np.asarray(w.point), np.asarray(w.direction)
+        ends[w.name] = {tuple(p + w.h1 * e), tuple(p + w.h2 * e)}
+    assert ends["bottom"] == {(1.0, -2.0), (5.0, -2.0)}
+    assert ends["right"] == {(5.0, -2.0), (5.0, 1.0)}
+    assert ends["top"] == {(1.0, 1.0), (5.0, 1.0)}
+    assert ends["left"] == {(1.0, -2.0), (1.0, 1.0)}
+    top, left = ws[2].direction, ws[3].direction
+    assert (top, left) == (((-1.0, 0.0), (0.0, -1.0)) if ccw else ((1.0, 0.0), (0.0, 1.0)))
+
+
+def test_box_walls_half_lengths_phases_servos():
+    from demflow.scene import Phase, Servo
+
+    ph = {"top": (Phase(10, velocity=(0.0, -1.0)),)}
+    sv = {"right": Servo(1.0, (-1.0, 0.0), 0.1, 0.1)}
+    ws = box_walls(0.0, 300.0, 0.0, 300.0, half_length=(400.0, 250.0), phases=ph, servos=sv)
+    assert [(w.h1, w.h2) for w in ws] == [(-400.0, 400.0), (-250.0, 250.0)] * 2
+    assert ws[2].phases == ph["top"] and ws[1].servo is sv["right"] and ws[0].servo is None
+    assert {(w.h1, w.h2) for w in box_walls(0.0, 1.0, 0.0, 2.0, half_length=3.0)} == {(-3.0, 3.0)}
+    with pytest.raises(ValueError, match="no wall named"):
+        box_walls(0.0, 1.0, 0.0, 1.0, phases={"roof": ()})
+    with pytest.raises(ValueError, match="empty"):
+        box_walls(1.0, 0.0, 0.0, 1.0)
+
+
+# -- random sequential addition
+def _overlap_free(x, y, r, box, gap=0.0):
+    x0, x1, y0, y1 = box
+    assert np.all(x - r >= x0) and np.all(x + r <= x1) and np.all(y - r >= y0) and np.all(y + r <= y1)
+    d = np.hypot(x[:, None] - x[None], y[:, None] - y[None])
+    s = r[:, None] + r[None] + gap
+    np.fill_diagonal(d, np.inf)
+    assert np.all(d >= s * (1 - 1e-12))
+
+
+def test_rsa_is_deterministic_and_overlap_free():
+    r = np.repeat([2.0, 1.5, 1.0], [5, 10, 20])
+    box = (0.0, 30.0, 0.0, 20.0)
+    a = random_sequential_addition(r, box, np.random.default_rng(3), gap=0.01)
+    b = random_sequential_addition(r, box, np.random.default_rng(3), gap=0.01)
+    assert all(u.tobytes() == v.tobytes() for u, v in zip(a, b))
+    _overlap_free(*a, box, gap=0.01)
+    c = random_sequential_addition(r, box, np.random.default_rng(4), gap=0.01)
+    assert not np.array_equal(a[0], c[0])
+
+
+def test_rsa_with_radius_drawn_per_try():
+    x, y, r = random_sequential_addition(lambda g: g.uniform(0.5, 1.0), (0.0, 20.0, 0.0, 20.0),
+                                         np.random.default_rng(0), n=40)
+    assert r.size == 40 and r.min() >= 0.5 and r.max() <= 1.0
+    _overlap_free(x, y, r, (0.0, 20.0, 0.0, 20.0))
+    with pytest.raises(ValueError, match="give the number of discs n"):
+        random_sequential_addition(lambda g: 1.0, (0.0, 1.0, 0.0, 1.0), np.random.default_rng(0))
+
+
+def test_rsa_jams_with_a_clear_error():
+    with pytest.raises(RuntimeError, match="jammed.*larger box"):
+        random_sequential_addition(np.full(10, 1.0), (0.0, 4.0, 0.0, 4.0), np.random.default_rng(0), tries=50,
+                                   restarts=2)
+
+
+# -- run_until
+class _Counter:
+    """A stand-in simulation: ``step`` advances by ``run(n)``."""
+
+    def __init__(self):
+        self.step = 0
+        self.calls = 0
+
+    def run(self, n):
+        self.step += n
+        self.calls += 1
+        return self
+
+
+def test_run_until_stops_when_the_condition_holds():
+    sim = _Counter()
+    assert run_until(sim, lambda s: s.step >= 35, max_step=1000, chunk=10) is True
+    assert sim.step == 40 and sim.calls == 4
+
+
+def test_run_until_at_the_limit_raises_or_returns_false():
+    with pytest.raises(RuntimeError, match="never did not hold by step 100"):
+        run_until(_Counter(), lambda s: False, max_step=100, chunk=10, what="never")
+    sim = _Counter()
+    assert run_until(sim, lambda s: False, max_step=100, chunk=7, raise_at_limit=False) is False
+    assert sim.step == 105
+    with pytest.raises(ValueError, match="chunk = 0"):
+        run_until(_Counter(), lambda s: True, max_step=10, chunk=0)
+
+
+def test_run_until_on_a_real_simulation():
+    from demflow import Discs, LinearLaw, Material, Outputs, Scene, build
+
+    sc = Scene(name="fall", discs=Discs([0.5], [5.0], [0.5], "d"), materials={"d": Material(1.0), "wall": Material()},
+               laws={("d", "wall"): LinearLaw(kn=1e4)}, walls=box_walls(0.0, 1.0, 0.0, 10.0), gravity=(0.0, -10.0),
+               dt=1e-3, outputs=Outputs(every=0))
+    sim = build(sc)
+    assert run_until(sim, lambda s: s.y[0] < 4.0, max_step=10_000, chunk=10)
+    assert sim.y[0] < 4.0 and sim.step % 10 == 0
+
+
+# -- Check.info and the counts
+def test_info_is_reported_but_never_counted():
+    ok = Check("a", 1.0, 1.0, 1e-3, "src", "why", kind="exact")
+    bad = Check("b", 2.0, 1.0, 1e-3, "src", "why", kind="source")
+    i1 = Check.info("c", 5.0, "src", "shown only")
+    i2 = Check.info("d", 1.5, "src", "shown only", reference=1.0)
+    assert i1.kind == i2.kind == "info" and i1.passed and i2.passed and i1.informative
+    assert math.isinf(i1.tolerance) and i1.error == 0.0 and i1.reference == 5.0 and not i1.relative
+    assert i2.error == 0.5 and i2.relative
+    assert counted([ok, bad, i1, i2]) == [ok, bad]
+    from demflow.report import check_counts
+
+    rows = [dict(passed=c.passed, kind=c.kind, tolerance=c.tolerance) for c in (ok, bad, i1, i2)]
+    assert check_counts(rows) == "1/2 checks pass, 2 informative"
+    assert check_counts(rows[:1]) == "1/1 checks pass"
+    # a summary written before kinds existed: infinite tolerance marks an informative line
+    assert check_counts([dict(passed=True, tolerance=math.inf), dict(passed=True, tolerance=0.1)]) == \
+        "0/0 checks pass, 1/1 unclassified, 1 informative"
+
+
+def test_report_counts_info_apart(tmp_path):
+    from demflow.report import write_report
+
+    checks = [dict(name=c.name, value=c.value, reference=c.reference, error=c.error, tolerance=c.tolerance,
+                   passed=c.passed, source=c.source, why=c.why, relative=c.relative, kind=c.kind)
+              for c in (Check("a", 1.0, 1.0, 1e-3, "s", "w", kind="exact"), Check.info("i", 2.0, "s", "w"))]
+    summary = dict(generated="now", python="3", machine="m", cases={"thesis-one-disc": dict(
+        title="t", source="s", params={}, wall_time_s=0.0, passed=True, assumptions=[], figures=[], checks=checks)})
+    write_report(summary, tmp_path)
+    assert "1/1 checks pass, 1 informative" in (tmp_path / "index.html").read_text()
+    assert ">info<" in (tmp_path / "thesis-one-disc" / "index.html").read_text()
+
+
+# -- hooks and the typed return
+def test_reference_and_compare_choices_come_from_the_registry():
+    assert set(reference_cases()) == {"cs-nine-disc", "cs-photoelastic"}
+    assert set(comparison_cases()) == {"cs-nine-disc", "cs-photoelastic"}
+    plan = CASES["cs-nine-disc"].reference_plan()
+    assert plan.store == "cs-nine-disc" and "undamped" in plan.variants("liggghts")
+    assert CASES["cs-nine-disc"].comparison_case().name == "cs-nine-disc-engines"
+    from demflow.cli import main
+
+    for cmd in ("reference", "compare"):
+        with pytest.raises(SystemExit):
+            main([cmd, "thesis-one-disc", "--engine", "yade"] if cmd == "reference" else [cmd, "thesis-one-disc"])
+
+
+def test_page_sections_hook():
+    assert [t for t, _ in CASES["cs-nine-disc-engines"].page_sections()] == ["Model-equivalence table"]
+    assert Case.page_sections() == []
+
+
+@pytest.mark.parametrize("module", ["cli.py", "report/validation.py"])
+def test_no_branch_on_a_case_name(module):
+    """The CLI and the report look cases up through hooks, never by comparing a name string."""
+    tree = ast.parse((Path(demflow.__file__).parent / module).read_text())
+    names = set(CASES)
+    found = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant) and n.value in names]
+    assert not found, f"{module} names cases {found}; give the case a hook (demflow/cases/base.py) instead"
+
+
+def test_a_case_run_is_a_caserun():
+    case = CASES["thesis-impact"]
+    p = case.merged()
+    run = case.run(p)
+    assert isinstance(run, CaseRun) and set(run.results) == {"thesis"} and run.extras == {}
+    assert sum(c.kind == "info" for c in case.checks(run, p)) == 4
+
+
+# -- kinds (issue 18 item 1)
+def test_every_check_has_a_kind_and_tolerances_carry_one():
+    from demflow.tolerances import KINDS, TOLERANCES
+
+    assert all(t.kind in KINDS for t in TOLERANCES.values())
+    assert Check.against("x", 1.0, 1.0, "bem.moving-planes", "s").kind == "calibration"
+    with pytest.raises(ValueError, match="kind '' is not one of"):
+        Check("x", 1.0, 1.0, 0.1, "s", "w")
+    with pytest.raises(TypeError):
+        Check.condition("x", True, 1.0, "s", "w")
+
+
+def test_calibrations_and_info_are_not_validation_and_summary_is_strict_json(tmp_path):
+    import json
+
+    from demflow.report import check_counts, write_report
+
+    cs = [Check("a", 1.0, 1.0, 1e-3, "s", "w", kind="source"), Check("b", 1.0, 1.0, 1e-3, "s", "w", kind="exact"),
+          Check.condition("c", False, 3.0, "s", "w", kind="calibration"), Check.info("i", 2.0, "s", "w")]
+    rows = [dict(name=c.name, value=c.value, reference=c.reference, error=c.error, tolerance=c.tolerance,
+                 passed=c.passed, source=c.source, why=c.why, relative=c.relative, kind=c.kind) for c in cs]
+    assert check_counts(rows) == "2/2 checks pass, 0/1 calibrations, 1 informative"
+    summary = dict(generated="now", python="3", machine="m", cases={"thesis-one-disc": dict(
+        title="t", source="s", params={}, wall_time_s=0.0, passed=False, assumptions=[], figures=[], checks=rows)})
+    write_report(summary, tmp_path)
+    d = json.load(open(tmp_path / "summary.json"), parse_constant=lambda c: 1 / 0)
+    assert d["validation"] == {"passed": 2, "total": 2}
+    assert d["counts"]["calibration"] == {"passed": 0, "total": 1} and d["counts"]["info"]["total"] == 1
+    assert d["cases"]["thesis-one-disc"]["checks"][3]["tolerance"] is None
+    index = (tmp_path / "index.html").read_text()
+    assert "Validation checks passed: 2/2" in index and "calibration 0/1" in index
+
+
+def test_every_check_built_in_demflow_names_its_kind():
+    """Static: a slow case must not find out at run time that a check lacks its kind."""
+    missing = []
+    for f in (Path(demflow.__file__).parent / "cases").glob("*.py"):
+        for n in ast.walk(ast.parse(f.read_text())):
+            if isinstance(n, ast.Call):
+                fn = n.func
+                direct = isinstance(fn, ast.Name) and fn.id == "Check"
+                cond = isinstance(fn, ast.Attribute) and fn.attr == "condition" and getattr(fn.value, "id", "") == "Check"
+                if (direct or cond) and "kind" not in {k.arg for k in n.keywords}:
+                    missing.append(f"{f.name}:{n.lineno}")
+    assert not missing, f"checks without a kind: {missing}; pass kind= (demflow/tolerances.py lists the kinds)"
