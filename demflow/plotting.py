@@ -64,3 +64,14 @@ def save_figure(fig, path, dpi=110) -> str:
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return str(path)
+
+
+def finish_figure(fig, ax, path, *, xlabel, ylabel, title, legend_fontsize=None):
+    """Label ``ax``, add its legend (if ``legend_fontsize``), save ``fig`` to ``path``; returns ``path``."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    if legend_fontsize:
+        ax.legend(fontsize=legend_fontsize)
+    save_figure(fig, path)
+    return path

@@ -28,7 +28,7 @@ import numpy as np
 from ..bem import TABLE, Domain, Problem, channel, circle, rectangle
 from ..tolerances import TOLERANCES
 from .base import Case, CaseRun, Check
-from ..plotting import save_figure
+from ..plotting import finish_figure, save_figure
 
 # Temporary home of the BEM tolerances (final home: demflow/tolerances.py, same names).
 
@@ -68,6 +68,37 @@ def _richardson(values):
     v1, v2 = values[-2], values[-1]
     ext = v2 + (v2 - v1) / 3.0
     return ext, abs(ext - v2) / abs(ext)
+
+
+def _cylinder_levels(levels, problem, quad) -> CaseRun:
+    """Solve ``problem(n)`` for every mesh level n (elements on the cylinder); each level's drag T,
+    lift, moment, solve time and size as a BEMRun in ``extras["levels"]``."""
+    out = {}
+    for n in levels:
+        s, dt = _solve_timed(problem(n), quad)
+        F = s.force("cylinder")
+        out[f"n{n}"] = BEMRun(s, dict(n_cyl=n, T=F[0], Fy=F[1], M=s.moment("cylinder"), time_s=dt,
+                                      n_unknowns=s.n_unknowns))
+    return CaseRun(extras={"levels": out})
+
+
+def _drag_levels(run):
+    """(levels, drags T per level, the finest level's meta, Richardson extrapolation of T, its correction)."""
+    results = run.extras["levels"]
+    T = [r.meta["T"] for r in results.values()]
+    ext, corr = _richardson(T)
+    return results, T, list(results.values())[-1].meta, ext, corr
+
+
+def _mesh_and_symmetry(corr, last, source, moment):
+    """The Richardson remaining error of T/μU and the symmetry checks (|F_y|/T, and |M|/(T R) with ``moment``)."""
+    out = [_against("remaining discretisation error (Richardson) of T/μU", corr, 0.0, "bem.mesh-converged", source),
+           _against("transverse force |F_y|/T (symmetry)", abs(last["Fy"]) / abs(last["T"]), 0.0, "bem.symmetry",
+                    source)]
+    if moment:
+        out.append(_against("moment |M|/(T R) (symmetry)", abs(last["M"]) / abs(last["T"]), 0.0, "bem.symmetry",
+                            source))
+    return out
 
 
 def _solve_timed(pb, quad):
@@ -133,20 +164,10 @@ class CylinderPoiseuille(_BEMCase):
     params = dict(n=128, length=20.0, quad=TABLE, refine=True)
 
     def run(self, p):
-        out = {}
-        for n in self._levels(p):
-            pb = cylinder_poiseuille_problem(n, p["length"])
-            s, dt = _solve_timed(pb, p["quad"])
-            F = s.force("cylinder")
-            out[f"n{n}"] = BEMRun(s, dict(n_cyl=n, T=F[0], Fy=F[1], M=s.moment("cylinder"), time_s=dt,
-                                          n_unknowns=s.n_unknowns))
-        return CaseRun(extras={"levels": out})
+        return _cylinder_levels(self._levels(p), lambda n: cylinder_poiseuille_problem(n, p["length"]), p["quad"])
 
     def checks(self, run, p):
-        results = run.extras["levels"]
-        T = [r.meta["T"] for r in results.values()]
-        last = list(results.values())[-1].meta
-        ext, corr = _richardson(T)
+        results, T, last, ext, corr = _drag_levels(run)
         return [
             Check.condition("extrapolated T/μU inside the literature range 24.15-24.55", 24.15 <= ext <= 24.55, ext,
                             self.source, "Acceptance of issue 3: the refined value lies in the range quoted by the "
@@ -157,12 +178,7 @@ class CylinderPoiseuille(_BEMCase):
                             len(T) < 3 or abs(T[1] - T[0]) >= 3 * abs(T[2] - T[1]), T[-1], self.source,
                             "Straight elements on a circle and linear interpolation converge at O(h²): each halving "
                             "of the element size should cut the change by about 4.", kind="self-consistency"),
-            _against("remaining discretisation error (Richardson) of T/μU", corr, 0.0, "bem.mesh-converged",
-                     self.source),
-            _against("transverse force |F_y|/T (symmetry)", abs(last["Fy"]) / abs(last["T"]), 0.0, "bem.symmetry",
-                     self.source),
-            _against("moment |M|/(T R) (symmetry)", abs(last["M"]) / abs(last["T"]), 0.0, "bem.symmetry",
-                     self.source),
+            *_mesh_and_symmetry(corr, last, self.source, moment=True),
             _thesis_info("thesis value T/μU = 24.20 (informative)", T[-1], 24.20, self.source),
         ]
 
@@ -187,27 +203,15 @@ class CylinderMovingPlanes(_BEMCase):
     params = dict(n=128, length=20.0, half_width=2.0, quad=TABLE, refine=True)
 
     def run(self, p):
-        out = {}
-        for n in self._levels(p):
-            pb = cylinder_moving_planes_problem(n, p["length"], p["half_width"])
-            s, dt = _solve_timed(pb, p["quad"])
-            F = s.force("cylinder")
-            out[f"n{n}"] = BEMRun(s, dict(n_cyl=n, T=F[0], Fy=F[1], M=s.moment("cylinder"), time_s=dt,
-                                          n_unknowns=s.n_unknowns))
-        return CaseRun(extras={"levels": out})
+        return _cylinder_levels(self._levels(p), lambda n: cylinder_moving_planes_problem(n, p["length"], p["half_width"]),
+                                p["quad"])
 
     def checks(self, run, p):
-        results = run.extras["levels"]
-        T = [r.meta["T"] for r in results.values()]
-        last = list(results.values())[-1].meta
-        ext, corr = _richardson(T)
+        results, T, last, ext, corr = _drag_levels(run)
         return [
             _against("T/μU vs Bézine & Bonneau (98.8)", T[-1], 98.8, "bem.moving-planes", self.source),
             _against("T/μU vs Bouard (99.4)", T[-1], 99.4, "bem.moving-planes", self.source),
-            _against("remaining discretisation error (Richardson) of T/μU", corr, 0.0, "bem.mesh-converged",
-                     self.source),
-            _against("transverse force |F_y|/T (symmetry)", abs(last["Fy"]) / abs(last["T"]), 0.0, "bem.symmetry",
-                     self.source),
+            *_mesh_and_symmetry(corr, last, self.source, moment=False),
             _thesis_info("thesis value T/μU = 97.29 (informative)", T[-1], 97.29, self.source),
         ]
 
@@ -309,12 +313,9 @@ class FreeRectangle(_BEMCase):
             m = d.node_mask(("particle", side))
             ax.plot(d.nodes[m, 0], pr[m], st, label=f"particle {side} face")
         ax.set_xlim(-3, 3)
-        ax.set_xlabel("x / a")
-        ax.set_ylabel("p / (μU/a)  (mean over channel boundary = 0)")
-        ax.set_title("pressure on the walls and the particle (thesis Fig. 4.18)")
-        ax.legend(fontsize=7)
-        path = f"{outdir}/pressure.png"
-        save_figure(fig, path)
+        path = finish_figure(fig, ax, f"{outdir}/pressure.png", xlabel="x / a",
+                             ylabel="p / (μU/a)  (mean over channel boundary = 0)",
+                             title="pressure on the walls and the particle (thesis Fig. 4.18)", legend_fontsize=7)
         del part
         return figs + [path]
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from ..scene import Discs, GlobalDamping, LinearLaw, Material, Outputs, Scene, Wall
 from .base import Case, Check
-from ..plotting import save_figure
+from ..plotting import finish_figure
 
 WEIGHT = 75398.23  # N, thesis §2.2.5.1 (m g with m = 7539.823 kg)
 SRC = "thesis Table 2.1, §2.2.5.1"
@@ -81,10 +81,6 @@ class OneDisc(Case):
             f, t = self.plate_force(res)
             ax.plot(t, f, label=name, lw=1)
         ax.axhline(WEIGHT, color="k", ls=":", lw=0.8, label="weight")
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("normal force on the plate [N]")
-        ax.set_title("One disc on a plate (thesis Fig. 2.10)")
-        ax.legend(fontsize=8)
-        path = f"{outdir}/plate_force.png"
-        save_figure(fig, path)
-        return [path]
+        return [finish_figure(fig, ax, f"{outdir}/plate_force.png", xlabel="time [s]",
+                              ylabel="normal force on the plate [N]", title="One disc on a plate (thesis Fig. 2.10)",
+                              legend_fontsize=8)]
