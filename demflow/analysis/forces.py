@@ -121,12 +121,27 @@ def normalized_forces(data, step=None, where="all", tol=0.0) -> NormalizedForces
                             n_total=int(fn.size))
 
 
-def _as_f(f_or_data, step=None, where="all") -> np.ndarray:
+# a bare array of f = F/<F> must have mean 1 to this relative tolerance (round-off of the division
+# and of the mean over up to ~1e7 forces is below 1e-12; a forgotten normalisation is off by far more)
+NORMALISED_MEAN_TOLERANCE = 1e-9
+
+
+def _as_f(f_or_data, step=None, where="all", mean_one=False) -> np.ndarray:
+    """f = F/<F> from a NormalizedForces, a results or contacts table (normalised here), or a bare array
+    (with ``mean_one``, as for the q-model whose scale is 1/N, it must already be normalised: mean 1,
+    refused otherwise with the fix)."""
     if isinstance(f_or_data, NormalizedForces):
         return f_or_data.f
     if hasattr(f_or_data, "contacts") or isinstance(f_or_data, pd.DataFrame):
         return normalized_forces(f_or_data, step, where).f
     f = np.asarray(f_or_data, dtype=float)
+    if f.size and not np.all(np.isfinite(f)):
+        raise ValueError("the forces contain a non-finite value; give finite f = F/<F>")
+    mean = float(f.mean()) if f.size else 1.0
+    if mean_one and abs(mean - 1.0) > NORMALISED_MEAN_TOLERANCE:
+        raise ValueError(
+            f"the forces given have mean {mean:.6g}, but the statistics take f = F/<F> (mean 1): pass F / F.mean(), "
+            "a NormalizedForces (normalized_forces(...)), or a results/contacts table to normalise here")
     return f[f > 0]
 
 
@@ -238,8 +253,9 @@ def fit_q_model(f, alpha=0.05, step=None, where="all") -> QModelFit:
     a constant) the profile log-likelihood of N for a gamma law of F with a free scale, so the
     interval {N : 2[ℓ(N̂) - ℓ(N)] <= χ²₁(1-α)} is the profile-likelihood CI and it accounts for
     the normalisation. ``se`` is from the matching Fisher information n(ψ'(N) - 1/N).
+    A bare array must be f = F/<F> (mean 1): one that is not is refused (its N would be wrong).
     """
-    f = _as_f(f, step, where)
+    f = _as_f(f, step, where, mean_one=True)
     n = f.size
     if n < 3:
         raise ValueError(f"only {n} positive forces")
