@@ -19,7 +19,7 @@ from .contacts.neighbours import (contacts_of_particles_signed, internal_layout,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
 from .space import wrap
-from .state import (Discs, Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
+from .state import (Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
                     pair_outputs)
 from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps
 

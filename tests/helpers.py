@@ -1,7 +1,7 @@
 """Small scenes for the property tests."""
 import numpy as np
 
-from demflow import (ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Scene)
+from demflow import (ContactModel, Discs, LinearLaw, Material, Outputs, Scene)
 from demflow.cases.fixtures import box_walls as fixtures_box_walls, random_sequential_addition
 
 

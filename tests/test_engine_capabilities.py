@@ -6,7 +6,7 @@ import html
 
 import pytest
 
-from demflow import ContactModel, GlobalDamping, LinearLaw, Servo, build
+from demflow import ContactModel, GlobalDamping, Servo, build
 from demflow.cases.cs_nine_disc import NineDisc
 from demflow.cases.cs_nine_disc_engines import CASE, engine_scene
 from demflow.engines import EngineUnsupported, LiggghtsEngine, YadeEngine, reference

@@ -14,7 +14,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from ..results import TABLES, Results
+from ..results import Results
 from .base import EngineError, atomic_json, sha256
 
 README = """# Reference run: {case} / {variant} / {engine}
