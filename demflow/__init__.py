@@ -7,8 +7,11 @@ from .scene import (Box, ContactModel, Discs, GlobalDamping, LinearLaw, Material
 from .build import build
 from .simulation import BlowUpError, Simulation
 from .results import Results
+from .laws.hertz_mindlin import HertzMindlinLaw
+from .scene3d import Outputs3D, Plane, PlanePhase, PlateServo, Scene3D, Spheres
 
 __version__ = "0.1.0"
 
 __all__ = ["Scene", "Box", "Discs", "Wall", "Phase", "Servo", "Material", "LinearLaw", "ContactModel",
-           "GlobalDamping", "Outputs", "SceneError", "build", "Simulation", "BlowUpError", "Results"]
+           "GlobalDamping", "Outputs", "SceneError", "build", "Simulation", "BlowUpError", "Results",
+           "Scene3D", "Spheres", "Plane", "PlanePhase", "PlateServo", "Outputs3D", "HertzMindlinLaw"]

@@ -225,8 +225,15 @@ def _check_box(scene: Scene, r, x, y):
 
 
 def build(scene: Scene):
-    """Check ``scene`` and return a ready :class:`~demflow.simulation.Simulation`."""
+    """Check ``scene`` and return a ready :class:`~demflow.simulation.Simulation` (a 3D
+    :class:`~demflow.scene3d.Scene3D`: a :class:`~demflow.simulation3d.Simulation3D`)."""
+    from .scene3d import Scene3D
     from .simulation import Simulation
+
+    if isinstance(scene, Scene3D):
+        from .build3d import build3d
+
+        return build3d(scene)
 
     check_identifier("scene", scene.name)
     for m in scene.materials:

@@ -42,9 +42,13 @@ def check_identifier(kind: str, name: str) -> str:
 
 @dataclass(frozen=True)
 class Material:
-    """A material: density ρ [mass/length²] (disc mass ρπR², unit thickness)."""
+    """A material: density ρ [mass/length²] (2D: disc mass ρπR², unit thickness; 3D: sphere mass
+    4/3 πR³ρ with ρ [mass/length³]); Young's modulus ``young`` E [force/length²] and Poisson's ratio
+    ``poisson`` ν for the Hertz-Mindlin law (None where no such law uses the material)."""
 
     density: float = 0.0
+    young: float | None = None
+    poisson: float | None = None
 
 
 @dataclass(frozen=True)

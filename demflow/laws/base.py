@@ -88,3 +88,26 @@ class LawFamily:
         c = min(width, hist.shape[1])
         out[:, :c] = hist[:, :c]
         return out
+
+
+# --------------------------------------------------------------------------- the 3D pair calls
+# A 3D contact's history row starts with its tangential vector (columns 0-2: a force or a
+# displacement, the law says which); the sphere pair pass rotates that vector into the current
+# tangent plane before it calls the law (keeping its length), so a law sees history in the plane
+# of the contact.  Further columns are the law's own (scalars; a law that keeps vectors there
+# projects them itself).
+
+def law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
+    """Advance 3D contact k by one step; returns (Fn, Tx, Ty, Tz, sliding).
+
+    ``vn`` = (v_i - v_j)·n > 0 while approaching, (vtx, vty, vtz) the tangential relative velocity
+    of i's contact point against j's, n the unit normal from i to j, ``meff`` m_i m_j/(m_i + m_j)
+    (the body mass against a plane), ``rstar`` R_i R_j/(R_i + R_j) (R_i against a plane).  Fn >= 0
+    is the total normal force (it pushes i along -n); T is the total tangential force on i.
+    Compiled per law (overload)."""
+    raise NotImplementedError(f"no compiled 3D law for parameters of type {type(law).__name__}")
+
+
+def law_energy3(law, e, hist, k, ma, mb, rstar, overlap):
+    """e plus the elastic energy of 3D contact k [force·length].  Compiled per law (overload)."""
+    raise NotImplementedError(f"no compiled 3D law for parameters of type {type(law).__name__}")

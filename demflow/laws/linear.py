@@ -9,13 +9,14 @@ both discs receive the moment +(S + D_S)·R (eq 2.20).
 """
 from __future__ import annotations
 
+import math
 from collections import namedtuple
 
 import numpy as np
 from numba.extending import overload
 
 from ..jit import njit
-from .base import LawFamily, is_params_of, law_energy_add, law_force, law_separate
+from .base import LawFamily, is_params_of, law_energy3, law_energy_add, law_force, law_force3, law_separate
 
 NORMAL_INCREMENTAL = 0  # N += kN ṅ Δt (thesis eqs 2.11, 2.13, 2.15)
 NORMAL_OVERLAP = 1  # N = kN δ (YADE / LIGGGHTS)
@@ -122,6 +123,61 @@ def _linear_energy(law, e, hist, k, ma, mb):
     return impl
 
 
+@overload(law_force3, inline="always")
+def _linear_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
+    """The linear law for 3D contacts: history (S vector, N); the shear spring is a vector
+    in the tangent plane (rotated there by the pass), incremented by -k_S v_t Δt (eqs 2.14/2.16)."""
+    if not is_params_of(law, LinearParams):
+        return None
+
+    def impl(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
+        kn = law.kn[ma, mb]
+        if law.normal_mode == NORMAL_INCREMENTAL:
+            N = hist[k, 3] + kn * vn * dt
+        else:
+            N = kn * overlap
+        if N < 0.0:
+            N = 0.0
+        hist[k, 3] = N
+        Fn = N + law.cn[ma, mb] * vn
+        if Fn < 0.0:
+            Fn = 0.0
+        if not law.has_shear:
+            return Fn, 0.0, 0.0, 0.0, False
+        ks = law.ks[ma, mb]
+        Sx = hist[k, 0] - ks * vtx * dt
+        Sy = hist[k, 1] - ks * vty * dt
+        Sz = hist[k, 2] - ks * vtz * dt
+        cs = law.cs[ma, mb]
+        smax = law.mu[ma, mb] * (Fn if law.sliding_mode == SLIDING_CS else N) + law.coh[ma, mb]
+        s2 = Sx * Sx + Sy * Sy + Sz * Sz
+        sliding = s2 > smax * smax
+        if sliding:
+            f = smax / math.sqrt(s2)
+            Sx *= f
+            Sy *= f
+            Sz *= f
+            cs = 0.0  # no shear dashpot while sliding
+        hist[k, 0] = Sx
+        hist[k, 1] = Sy
+        hist[k, 2] = Sz
+        return Fn, Sx - cs * vtx, Sy - cs * vty, Sz - cs * vtz, sliding
+    return impl
+
+
+@overload(law_energy3, inline="always")
+def _linear_energy3(law, e, hist, k, ma, mb, rstar, overlap):
+    if not is_params_of(law, LinearParams):
+        return None
+
+    def impl(law, e, hist, k, ma, mb, rstar, overlap):
+        e += 0.5 * hist[k, 3] ** 2 / law.kn[ma, mb]
+        if law.has_shear and law.ks[ma, mb] > 0.0:
+            e += 0.5 * (hist[k, 0] ** 2 + hist[k, 1] ** 2 + hist[k, 2] ** 2) / law.ks[ma, mb]
+        return e
+    return impl
+
+
 class Linear(LawFamily):
     """The linear spring-dashpot-Coulomb law (this module) as a law family.
 
@@ -148,6 +204,8 @@ class Linear(LawFamily):
         self.has_shear = bool(any(law.ks > 0 for law in laws_by_pair.values()))
 
     def history_width(self, dim: int = 2) -> int:
+        if dim == 3:
+            return 4  # shear spring vector S (3), normal spring N
         return 2 if self.has_shear else 1
 
     def tables(self) -> dict:

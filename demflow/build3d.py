@@ -1,0 +1,170 @@
+"""Build a 3D sphere scene: check it, allocate what its physics needs, select the compiled law.
+
+:func:`demflow.build.build` calls :func:`build3d` for a :class:`demflow.scene3d.Scene3D`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .laws.hertz_mindlin import HertzMindlin
+from .laws.linear import Linear
+from .scene import SceneError
+from .scene3d import Scene3D, check_scene3d
+from .simulation3d import Simulation3D
+from .state3d import Box3, Loading3, Planes3, Spheres3
+
+FAMILIES_3D = (Linear, HertzMindlin)
+
+
+def rayleigh_time_step(r: np.ndarray, mass: np.ndarray, young: np.ndarray, poisson: np.ndarray) -> float:
+    """The Rayleigh-wave time step min πR√(ρ/G)/(0.1631ν + 0.8766) (Li et al. 2005; YADE's
+    ``RayleighWaveTimeStep``), with ρ = m / (4/3 πR³) and G = E / 2(1 + ν) per sphere [time]."""
+    rho = mass / (4.0 / 3.0 * math.pi * r ** 3)
+    G = young / (2.0 * (1.0 + poisson))
+    return float(np.min(math.pi * r * np.sqrt(rho / G) / (0.1631 * poisson + 0.8766)))
+
+
+def _array(where: str, v, n: int, shape=None, dtype=np.float64) -> np.ndarray:
+    try:
+        a = np.array(v, dtype=dtype)
+    except (TypeError, ValueError):
+        raise SceneError(f"{where} cannot be read as numbers ({type(v).__name__}); give {n} values") from None
+    want = (n,) if shape is None else (n,) + shape
+    if a.shape != want:
+        raise SceneError(f"{where} has shape {a.shape}, not {want}; give one entry per sphere")
+    if dtype == np.float64 and not np.all(np.isfinite(a)):
+        k = int(np.argwhere(~np.isfinite(a))[0][0])
+        raise SceneError(f"{where}[{k}] = {a.flat[np.flatnonzero(~np.isfinite(a))[0]]} is not finite; give "
+                         "finite numbers")
+    return a
+
+
+def build3d(scene: Scene3D) -> Simulation3D:
+    """Check ``scene`` and return a :class:`Simulation3D` ready to run."""
+    check_scene3d(scene)
+    s = scene.spheres
+    n = len(s)
+    if n == 0:
+        raise SceneError("scene.spheres is empty; give at least one sphere")
+    x = _array("scene.spheres.x", s.x, n)
+    y = _array("scene.spheres.y", s.y, n)
+    z = _array("scene.spheres.z", s.z, n)
+    r = _array("scene.spheres.radius", s.radius, n)
+    if np.any(r <= 0):
+        k = int(np.argmax(r <= 0))
+        raise SceneError(f"scene.spheres.radius[{k}] = {r[k]} must be > 0")
+    mats = [s.material] * n if isinstance(s.material, str) else list(s.material)
+    if len(mats) != n:
+        raise SceneError(f"scene.spheres.material has {len(mats)} entries for {n} spheres; give one per sphere "
+                         "or one name for all")
+    for k, m in enumerate(mats):
+        if m not in scene.materials:
+            raise SceneError(f"scene.spheres.material[{k}] = {m!r} is not declared; add it to scene.materials")
+    names = list(scene.materials)
+    index = {m: k for k, m in enumerate(names)}
+    mat = np.array([index[m] for m in mats], np.int64)
+    if s.mass is not None:
+        mass = _array("scene.spheres.mass", s.mass, n)
+    else:
+        rho = np.array([scene.materials[m].density for m in mats])
+        mass = rho * 4.0 / 3.0 * math.pi * r ** 3
+    if np.any(mass <= 0):
+        k = int(np.argmax(mass <= 0))
+        raise SceneError(f"sphere {k} has mass {mass[k]} (material {mats[k]!r}, density "
+                         f"{scene.materials[mats[k]].density}); a mass must be > 0: give a density or a mass")
+    vel = np.zeros((n, 3)) if s.velocity is None else _array("scene.spheres.velocity", s.velocity, n, (3,))
+    angvel = (np.zeros((n, 3)) if s.angular_velocity is None
+              else _array("scene.spheres.angular_velocity", s.angular_velocity, n, (3,)))
+    fixed = np.zeros(n, np.int8) if s.fixed is None else _array("scene.spheres.fixed", s.fixed, n,
+                                                                    dtype=bool).astype(np.int8)
+    quat = np.zeros((n, 4))
+    quat[:, 0] = 1.0
+
+    # laws: every pair of materials that can meet
+    plane_mats = [p.material for p in scene.planes]
+    used = sorted(set(mats), key=names.index)
+    pairs = {}
+    for a in used:
+        for b in used + [m for m in plane_mats if m not in used]:
+            if b in used and names.index(b) < names.index(a):
+                continue
+            if b not in used and b not in plane_mats:
+                continue
+            pairs[(a, b)] = scene.law_for(a, b)
+    fams = {f for f in FAMILIES_3D for law in pairs.values() if f.accepts(law)}
+    if len(fams) != 1:
+        raise SceneError(f"scene {scene.name!r} mixes contact-law families ({sorted(f.name for f in fams)}) or has "
+                         "a law no 3D family implements; give every pair a LinearLaw or every pair a "
+                         "HertzMindlinLaw")
+    family = fams.pop()(scene, pairs, index)
+    params = family.params()
+    width = family.history_width(3)
+
+    # planes
+    npl = len(scene.planes)
+    point = np.array([p.point for p in scene.planes], np.float64).reshape(npl, 3)
+    normal = np.array([p.normal for p in scene.planes], np.float64).reshape(npl, 3)
+    if npl:
+        normal /= np.linalg.norm(normal, axis=1)[:, None]
+    planes = Planes3(point=point, normal=normal, vel=np.zeros((npl, 3)),
+                     mat=np.array([index[m] for m in plane_mats], np.int64), force=np.zeros((npl, 3)),
+                     ref=point.copy())
+    K = max([len(p.phases) for p in scene.planes] + [1])
+    ps = np.zeros((npl, K), np.int64)
+    pe = np.zeros((npl, K), np.int64)
+    pv = np.zeros((npl, K, 3))
+    for q, p in enumerate(scene.planes):
+        t = 0
+        for k, ph in enumerate(p.phases):
+            ps[q, k] = t
+            t += int(ph.cycles)
+            pe[q, k] = t
+            pv[q, k] = ph.velocity
+    loading = Loading3(phase_start=ps, phase_end=pe, phase_v=pv,
+                       servo_on=np.array([p.servo is not None for p in scene.planes], np.int8),
+                       servo_start=np.array([p.servo.start if p.servo else 0 for p in scene.planes], np.int64),
+                       servo_F=np.array([p.servo.force if p.servo else 1.0 for p in scene.planes]),
+                       servo_G=np.array([p.servo.gain if p.servo else 0.0 for p in scene.planes]),
+                       servo_vmax=np.array([p.servo.v_max if p.servo else 0.0 for p in scene.planes]))
+
+    skin = float(scene.skin) if scene.skin is not None else 0.2 * float(r.mean())
+    b = scene.box
+    lx = (b.periodic_x[1] - b.periodic_x[0]) if b.periodic_x else 0.0
+    ly = (b.periodic_y[1] - b.periodic_y[0]) if b.periodic_y else 0.0
+    box = Box3(periodic_x=b.periodic_x is not None, periodic_y=b.periodic_y is not None,
+               x0=b.periodic_x[0] if b.periodic_x else 0.0, y0=b.periodic_y[0] if b.periodic_y else 0.0,
+               lx=float(lx), ly=float(ly))
+    reach = 2.0 * float(r.max()) + skin
+    for axis, length in (("x", lx), ("y", ly)):
+        if length and length <= 2.0 * reach:
+            raise SceneError(f"scene.box periodic_{axis}: the period {length:.6g} must exceed twice the reach "
+                             f"2·r_max + skin = {reach:.6g} (minimum image); widen the box or reduce the skin")
+
+    # the critical time step
+    inertia = 0.4 * mass * r ** 2
+    if isinstance(family, HertzMindlin):
+        E = np.array([scene.materials[m].young for m in mats], np.float64)
+        nu = np.array([scene.materials[m].poisson for m in mats], np.float64)
+        dt_crit = rayleigh_time_step(r, mass, E, nu)
+        how = "the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766)"
+    else:
+        kmax = max(max(law.kn, law.ks) for law in pairs.values())
+        dt_crit = 2.0 * math.sqrt(float(mass.min()) / kmax)
+        how = "2√(m_min/k_max)"
+    if scene.dt is None:
+        dt = scene.dt_fraction * dt_crit
+    else:
+        dt = float(scene.dt)
+        if dt > dt_crit and not scene.allow_supercritical:
+            raise SceneError(f"scene.dt={dt:.6g} exceeds the critical estimate {dt_crit:.6g} ({how}); give a "
+                             "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
+                             "allow_supercritical=True")
+    d = scene.damping
+    sp = Spheres3(pos=np.stack([x, y, z], axis=1), vel=vel, angvel=angvel, quat=quat, r=r, mass=mass,
+                  inertia=inertia, mat=mat, fixed=fixed, force=np.zeros((n, 3)), torque=np.zeros((n, 3)),
+                  ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
+    return Simulation3D(scene=scene, spheres=sp, planes=planes, loading=loading, law=family, law_params=params,
+                        box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, alpha=d.alpha,
+                        alpha_rot_abs=d.C_rot, c_abs=d.C, local=scene.local_damping, width=width)

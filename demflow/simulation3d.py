@@ -1,0 +1,284 @@
+"""A built 3D sphere simulation: structure-of-arrays state plus the compiled cycle.
+
+Created by :func:`demflow.build.build` from a :class:`demflow.scene3d.Scene3D`; never construct it by
+hand.  ``run`` advances it (``progress=True`` shows a bar), ``tables`` returns the result tables,
+``save_checkpoint``/``load_checkpoint`` make long runs resumable (atomic writes), and a blow-up
+raises :class:`demflow.simulation.BlowUpError` with the last good state saved.
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .contacts.spheres import carry_history, sphere_pairs
+from .simulation import BlowUpError
+from .state3d import Pairs3, Records3
+from .stepping3d import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps3
+
+_STATE = ("pos", "vel", "angvel", "quat", "img")
+_RECORDED = ("step", "plane_force", "plane_pos", "energy", "contacts", "peak", "track")
+
+
+class Simulation3D:
+    """State and stepping of one 3D sphere scene (see :mod:`demflow.build3d`).
+
+    ``spheres`` (:class:`demflow.state3d.Spheres3`), ``planes``, ``loading``, ``pairs`` (key order,
+    with history), the law's compiled parameters ``law_params`` and the ``box``.
+    """
+
+    CHUNK = 20000  # steps between last-good-state copies
+
+    def __init__(self, *, scene, spheres, planes, loading, law, law_params, box, dt, dt_crit, skin,
+                 gravity, alpha, alpha_rot_abs, c_abs, local, width):
+        self.scene = scene
+        self.spheres = spheres
+        self.planes = planes
+        self.loading = loading
+        self.law = law
+        self.law_params = law_params
+        self.box = box
+        self.dt = float(dt)
+        self.dt_crit = float(dt_crit)
+        self.skin = float(skin)
+        self.g = np.asarray(gravity, np.float64)
+        self.alpha = float(alpha)
+        self.alpha_rot_abs = float(alpha_rot_abs)
+        self.c_abs = float(c_abs)
+        self.local = float(local)
+        self.width = int(width)
+        self.step = 0
+        self.work = np.zeros(2)  # work of the planes on the spheres, work of damping (<= 0)
+        self.dem_s = 0.0
+        self.n_rebuilds = 0
+        self._records = []
+        self.snapshots = {}
+        self.pairs = Pairs3(i=np.empty(0, np.int64), j=np.empty(0, np.int64), hist=np.zeros((0, width)),
+                            shift=np.zeros((0, 3)), fn=np.zeros(0), ft=np.zeros((0, 3)), ovl=np.zeros(0),
+                            slide=np.zeros(0, np.int8))
+        self.rebuild()
+
+    @property
+    def n(self) -> int:
+        return self.spheres.pos.shape[0]
+
+    @property
+    def n_planes(self) -> int:
+        return self.planes.point.shape[0]
+
+    def unwrapped_positions(self) -> np.ndarray:
+        """Centres with the periodic image counters undone (continuous trajectories)."""
+        out = self.spheres.pos.copy()
+        out[:, 0] += self.spheres.img[:, 0] * self.box.lx
+        out[:, 1] += self.spheres.img[:, 1] * self.box.ly
+        return out
+
+    def rebuild(self):
+        """Wrap periodic axes, list neighbours afresh and carry the history over by pair key."""
+        sp = self.spheres
+        for a, (on, lo, length) in enumerate(((self.box.periodic_x, self.box.x0, self.box.lx),
+                                              (self.box.periodic_y, self.box.y0, self.box.ly))):
+            if on:
+                k = np.floor((sp.pos[:, a] - lo) / length).astype(np.int64)
+                sp.pos[:, a] -= k * length
+                sp.img[:, a] += k
+        i, j, shift = sphere_pairs(sp.pos, sp.r, self.skin, self.box, self.planes.point, self.planes.normal)
+        old = self.pairs
+        hist = carry_history(old.i, old.j, old.hist, i, j, self.n + self.n_planes)
+        m = i.size
+        self.pairs = Pairs3(i=i, j=j, hist=hist, shift=shift, fn=np.zeros(m), ft=np.zeros((m, 3)),
+                            ovl=np.zeros(m), slide=np.zeros(m, np.int8))
+        sp.ref[:] = sp.pos
+        self.planes.ref[:] = self.planes.point
+        self.n_rebuilds += 1
+
+    def _new_records(self, n_steps: int) -> Records3:
+        every = int(self.scene.outputs.every)
+        nrec = min(n_steps // every + 1, self.CHUNK // every + 1) if every > 0 else 0
+        ids = np.asarray(self.scene.outputs.track_spheres, np.int64)
+        npl = self.n_planes
+        return Records3(every=every, step=np.zeros(nrec, np.int64), plane_force=np.zeros((nrec, npl, 3)),
+                        plane_pos=np.zeros((nrec, npl, 3)), energy=np.zeros((nrec, 5)),
+                        contacts=np.zeros(nrec, np.int64), peak=np.zeros((nrec, 2)), track_ids=ids, track=np.zeros((nrec, ids.size, 6)))
+
+    def run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
+            checkpoint_every: int | None = None, progress: bool = False) -> "Simulation3D":
+        """Advance ``n_steps`` steps (default: the scene's n_steps minus steps done).
+
+        Records are kept every ``scene.outputs.every`` steps (memory grows with what is recorded,
+        chunk by chunk, not with the run length).  With ``checkpoint`` a resumable state is written
+        atomically every ``checkpoint_every`` steps and at the end.  A blow-up (an overlap beyond
+        half a radius, a step beyond half a radius, a non-finite force) raises BlowUpError after
+        saving the last good state."""
+        if n_steps is None:
+            n_steps = max(self.scene.n_steps - self.step, 0)
+        target = self.step + int(n_steps)
+        snaps = sorted(s for s in self.scene.outputs.snapshots if self.step <= s <= target)
+        bar = None
+        if progress:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(total=int(n_steps), desc=self.scene.name, unit="step")
+        last_ckpt = self.step
+        try:
+            while True:
+                while snaps and snaps[0] == self.step:
+                    self.snapshot_now()
+                    snaps.pop(0)
+                if self.step >= target:
+                    break
+                stop = min(target, snaps[0] if snaps else target, self.step + self.CHUNK)
+                good = self._copy_state()
+                rec = self._new_records(stop - self.step)
+                rec_count = 0
+                while self.step < stop:
+                    t0 = time.perf_counter()
+                    done, status, rec_count = run_steps3(
+                        stop - self.step, self.step, self.skin, self.spheres, self.pairs, self.planes,
+                        self.loading, self.law_params, self.g, self.alpha, self.alpha_rot_abs, self.c_abs,
+                        self.local, self.dt, rec, rec_count, self.work)
+                    self.dem_s += time.perf_counter() - t0
+                    self.step += done
+                    if bar is not None:
+                        bar.update(done)
+                    if status == BLOWUP:
+                        self._keep_records(rec, rec_count)
+                        bad = self.step
+                        self._restore_state(good)
+                        path = self._save_last_good()
+                        raise BlowUpError(
+                            f"scene {self.scene.name!r} blew up at step {bad}: a contact overlapped more than "
+                            f"{MAX_OVERLAP_RATIO:.0%} of a radius, a sphere moved more than {MAX_STEP_RATIO:.0%} "
+                            f"of its radius in one step, or a force became non-finite. Reduce dt (now "
+                            f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate. Last "
+                            f"good state (step {self.step}) saved to {path}", path)
+                    if status == REBUILD:
+                        self.rebuild()
+                self._keep_records(rec, rec_count)
+                if checkpoint is not None and checkpoint_every and self.step - last_ckpt >= checkpoint_every:
+                    self.save_checkpoint(checkpoint)
+                    last_ckpt = self.step
+        finally:
+            if bar is not None:
+                bar.close()
+        if checkpoint is not None:
+            self.save_checkpoint(checkpoint)
+        return self
+
+    def _keep_records(self, rec: Records3, count: int) -> None:
+        if count:
+            self._records.append({k: getattr(rec, k)[:count].copy() for k in
+                                  _RECORDED})
+
+    def records(self) -> dict:
+        """Everything recorded so far, concatenated: step, plane_force (R, np, 3), plane_pos,
+        energy (R, 5: kinetic translation, kinetic rotation, elastic, potential, damping work),
+        contacts (R,), peak (R, 2: largest normal force, largest overlap), track (R, nt, 6)."""
+        if not self._records:
+            rec = self._new_records(0)
+            return {k: getattr(rec, k)[:0] for k in _RECORDED}
+        return {k: np.concatenate([r[k] for r in self._records]) for k in self._records[0]}
+
+    def snapshot_now(self) -> None:
+        """Keep the spheres' state and the touching contacts at the current step (see :meth:`tables`)."""
+        self.snapshots[self.step] = self.tables(include_records=False)
+
+    def tables(self, include_records: bool = True) -> dict:
+        """The result tables (pandas): ``spheres`` (state now), ``contacts`` (touching pairs now,
+        force on i), ``planes`` and, with ``include_records``, ``records`` (one row per recorded step)."""
+        import pandas as pd
+
+        sp = self.spheres
+        pos = self.unwrapped_positions()
+        spheres = pd.DataFrame({"id": np.arange(self.n), "x": pos[:, 0], "y": pos[:, 1], "z": pos[:, 2],
+                                "vx": sp.vel[:, 0], "vy": sp.vel[:, 1], "vz": sp.vel[:, 2],
+                                "wx": sp.angvel[:, 0], "wy": sp.angvel[:, 1], "wz": sp.angvel[:, 2],
+                                "r": sp.r, "mass": sp.mass})
+        p = self.pairs
+        on = p.ovl > 0
+        contacts = pd.DataFrame({"i": p.i[on], "j": p.j[on], "wall": p.j[on] >= self.n, "fn": p.fn[on],
+                                 "ftx": p.ft[on, 0], "fty": p.ft[on, 1], "ftz": p.ft[on, 2],
+                                 "overlap": p.ovl[on], "sliding": p.slide[on].astype(bool)})
+        names = [pl.name for pl in self.scene.planes]
+        planes = pd.DataFrame({"name": names, "px": self.planes.point[:, 0], "py": self.planes.point[:, 1],
+                               "pz": self.planes.point[:, 2], "fx": self.planes.force[:, 0],
+                               "fy": self.planes.force[:, 1], "fz": self.planes.force[:, 2]})
+        out = {"spheres": spheres, "contacts": contacts, "planes": planes}
+        if include_records:
+            r = self.records()
+            cols = {"step": r["step"], "t": r["step"] * self.dt, "contacts": r["contacts"],
+                    "kinetic_translation": r["energy"][:, 0], "kinetic_rotation": r["energy"][:, 1],
+                    "elastic": r["energy"][:, 2], "potential": r["energy"][:, 3], "damping_work": r["energy"][:, 4],
+                    "fn_max": r["peak"][:, 0], "overlap_max": r["peak"][:, 1]}
+            for q, name in enumerate(names):
+                for a, ax in enumerate("xyz"):
+                    cols[f"{name}_f{ax}"] = r["plane_force"][:, q, a]
+                    cols[f"{name}_p{ax}"] = r["plane_pos"][:, q, a]
+            for t, i in enumerate(self.scene.outputs.track_spheres):
+                for a, ax in enumerate(("x", "y", "z", "vx", "vy", "vz")):
+                    cols[f"s{i}_{ax}"] = r["track"][:, t, a]
+            out["records"] = pd.DataFrame(cols)
+        return out
+
+    # ------------------------------------------------------------------ state I/O
+    def _state_arrays(self) -> dict:
+        out = {k: getattr(self.spheres, k) for k in _STATE}
+        out.update(plane_point=self.planes.point, plane_vel=self.planes.vel, plane_force=self.planes.force,
+                   pair_i=self.pairs.i, pair_j=self.pairs.j, hist=self.pairs.hist, work=self.work)
+        return out
+
+    def _set_state(self, s: dict) -> None:
+        for k in _STATE:
+            getattr(self.spheres, k)[:] = s[k]
+        self.planes.point[:] = s["plane_point"]
+        self.planes.vel[:] = s["plane_vel"]
+        self.planes.force[:] = s["plane_force"]
+        self.work[:] = s["work"]
+        w = self.width
+        self.pairs = self.pairs._replace(i=np.array(s["pair_i"], np.int64), j=np.array(s["pair_j"], np.int64),
+                                         hist=np.array(s["hist"], np.float64).reshape(-1, w))
+        self.rebuild()
+
+    def _copy_state(self):
+        return {k: np.array(v, copy=True) for k, v in self._state_arrays().items()} | {"step": self.step}
+
+    def _restore_state(self, s):
+        self.step = s["step"]
+        self._set_state(s)
+
+    def _save_last_good(self):
+        out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
+        path = out / f"{self.scene.name}-last-good-step{self.step}.npz"
+        self.save_checkpoint(path)
+        return str(path)
+
+    def save_checkpoint(self, path: str | os.PathLike) -> Path:
+        """Write the dynamic state to ``path`` (.npz) atomically (temp file + rename)."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        meta = dict(scene=self.scene.name, step=self.step, n=self.n, n_planes=self.n_planes, dt=self.dt, dim=3)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
+        os.close(fd)
+        with open(tmp, "wb") as fh:
+            np.savez(fh, meta=json.dumps(meta), **self._state_arrays())
+        os.replace(tmp, path)
+        return path
+
+    def load_checkpoint(self, path: str | os.PathLike) -> "Simulation3D":
+        """Restore a state written by :meth:`save_checkpoint` for the same scene."""
+        with np.load(path) as z:
+            meta = json.loads(str(z["meta"]))
+            if meta.get("dim") != 3 or meta["scene"] != self.scene.name or meta["n"] != self.n \
+                    or meta["n_planes"] != self.n_planes:
+                raise ValueError(
+                    f"checkpoint {path} is for scene {meta['scene']!r} ({meta['n']} spheres, "
+                    f"{meta.get('n_planes')} planes), not {self.scene.name!r} ({self.n}, {self.n_planes}); "
+                    "build the same scene")
+            state = {k: z[k].copy() for k in z.files if k != "meta"}
+            self.step = int(meta["step"])
+        self._set_state(state)
+        return self

@@ -1,0 +1,76 @@
+"""The state a compiled 3D cycle works on (spheres; the sphere is its own body).
+
+Like :mod:`demflow.state`, each structure is a ``namedtuple`` of NumPy arrays (``float64`` unless
+said), passed to kernels as one argument; the law's parameters and the box select compiled code by
+their types.  Vectors are (n, 3) C-ordered arrays.
+"""
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+Spheres3 = namedtuple("Spheres3", [
+    "pos",      # (n, 3) centre [length]
+    "vel",      # (n, 3) velocity at the half step [length/time]
+    "angvel",   # (n, 3) angular velocity at the half step [1/time]
+    "quat",     # (n, 4) orientation (w, x, y, z), unit quaternion
+    "r",        # radius [length]
+    "mass",     # [mass]
+    "inertia",  # 2/5 mR² [mass·length²]
+    "mat",      # material index (int64)
+    "fixed",    # int8: 1 = not integrated (moves with its velocity)
+    "force",    # (n, 3) contact force sum of the last step [force]
+    "torque",   # (n, 3) contact moment sum of the last step [force·length]
+    "ref",      # (n, 3) position at the last neighbour-list build [length]
+    "img",      # (n, 2) int64 periodic image counters along x and y (unwrapped = pos + img·L)
+])
+
+Pairs3 = namedtuple("Pairs3", [
+    "i", "j",    # listed pairs in key order, i < j (int64); j >= n: plane j - n
+    "hist",      # (m, width) contact history (the law's; columns 0-2 the tangential vector)
+    "shift",     # (m, 3) image shift added to j's centre (periodic boxes)
+    "fn",        # (m,) total normal force of the last step [force] (0: apart)
+    "ft",        # (m, 3) total tangential force on i of the last step [force]
+    "ovl",       # (m,) overlap δ of the last step [length] (<= 0: apart)
+    "slide",     # (m,) int8 sliding flag
+])
+
+Planes3 = namedtuple("Planes3", [
+    "point", "normal",  # (np, 3) a point [length] and the unit normal towards the spheres
+    "vel",              # (np, 3) velocity of the current step [length/time]
+    "mat",              # material index (int64)
+    "force",            # (np, 3) force of the spheres on the plane [force]
+    "ref",              # (np, 3) point at the last neighbour-list build
+])
+
+Loading3 = namedtuple("Loading3", [
+    "phase_start", "phase_end",  # (np, K) int64 step ranges [start, end)
+    "phase_v",                   # (np, K, 3) prescribed velocity
+    "servo_on", "servo_start",   # (np,) int8 / int64
+    "servo_F", "servo_G", "servo_vmax",  # (np,) target force, gain, cap
+])
+
+Records3 = namedtuple("Records3", [
+    "every",       # record every this many steps (0: never)
+    "step",        # (R,) int64
+    "plane_force",  # (R, np, 3)
+    "plane_pos",   # (R, np, 3)
+    "energy",      # (R, 5): kinetic (translation), kinetic (rotation), elastic, potential -m g·x, dissipated
+    "contacts",    # (R,) int64 number of touching pairs (sphere-sphere and sphere-plane)
+    "peak",        # (R, 2) largest normal force and largest overlap over the listed pairs (a gap is < 0)
+    "track_ids",   # (nt,) int64 tracked spheres
+    "track",       # (R, nt, 6) position and velocity of the tracked spheres
+])
+
+Box3 = namedtuple("Box3", [
+    "periodic_x", "periodic_y",  # bool
+    "x0", "y0",                  # lower corner [length]
+    "lx", "ly",                  # periods [length] (0 where not periodic)
+])
+
+
+def empty_pairs3(width: int) -> Pairs3:
+    i0 = np.empty(0, np.int64)
+    return Pairs3(i=i0, j=i0.copy(), hist=np.zeros((0, width)), shift=np.zeros((0, 3)), fn=np.zeros(0),
+                  ft=np.zeros((0, 3)), ovl=np.zeros(0), slide=np.zeros(0, np.int8))

@@ -1,0 +1,222 @@
+"""The compiled 3D calculation cycle: plane motion, contact forces, central-difference integration.
+
+One step (ch3 eqs 3.19-3.20, the leapfrog scheme of the thesis §2.2.4 in 3D):
+
+1. planes take their velocity for this step (prescribed phases or the servo, eqs 5.11-5.12);
+2. contact forces and moments at the positions x_n (:func:`demflow.contacts.spheres.sphere_forces`);
+3. each free sphere: F = F_contact + m g, Cundall's local damping (Miyata eq 33) on every component,
+   F_c ← F_c (1 - α_l sign(F_c (v_c + F_c Δt/2m))) (YADE's NewtonIntegrator), then with
+   mass-proportional damping C = αm (ch3 eq 3.19)
+   v_{n+1/2} = ((m/Δt - C/2) v_{n-1/2} + F) / (m/Δt + C/2), x_{n+1} = x_n + Δt v_{n+1/2};
+   the same for ω with the moment of inertia and the moment (a sphere's inertia is isotropic, so
+   Euler's equations reduce to this); the orientation quaternion turns by |ω|Δt about ω;
+4. planes move by Δt × their velocity;
+5. the neighbour list is rebuilt (by the caller) once a sphere or plane has moved half the skin.
+
+Energies on recorded steps: kinetic with the on-step velocity (v_{n-1/2} + v_{n+1/2})/2, elastic and
+potential (-m g·x) at x_n, and the running work of damping and of the planes.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .contacts.spheres import OK, sphere_forces
+from .jit import njit
+
+DONE = 0
+REBUILD = 1
+BLOWUP = 2
+MAX_OVERLAP_RATIO = 0.5  # an overlap beyond half the smaller radius is a blow-up
+MAX_STEP_RATIO = 0.5  # a step longer than half a radius is a blow-up
+
+
+@njit
+def set_plane_velocities(step, planes, ld):
+    for p in range(planes.vel.shape[0]):
+        planes.vel[p, 0] = 0.0
+        planes.vel[p, 1] = 0.0
+        planes.vel[p, 2] = 0.0
+        if ld.servo_on[p] and step >= ld.servo_start[p]:
+            # spheres push the plane along -normal; F_C is that push
+            fc = -(planes.force[p, 0] * planes.normal[p, 0] + planes.force[p, 1] * planes.normal[p, 1]
+                   + planes.force[p, 2] * planes.normal[p, 2])
+            fa = ld.servo_F[p]
+            v = ld.servo_G[p] * (fa - fc) / fa
+            vm = ld.servo_vmax[p]
+            if v > vm:
+                v = vm
+            elif v < -vm:
+                v = -vm
+            for a in range(3):
+                planes.vel[p, a] = -v * planes.normal[p, a]
+            continue
+        for q in range(ld.phase_start.shape[1]):
+            if ld.phase_start[p, q] <= step < ld.phase_end[p, q]:
+                for a in range(3):
+                    planes.vel[p, a] = ld.phase_v[p, q, a]
+                break
+
+
+@njit
+def integrate(sp, g, alpha, alpha_rot_abs, c_abs, local, dt, recording):
+    """Advance free spheres by one step (module docstring).  Returns (kinetic translation,
+    kinetic rotation, potential, largest step length / radius, damping work this step)."""
+    n = sp.pos.shape[0]
+    ekt = 0.0
+    ekr = 0.0
+    epot = 0.0
+    jump = 0.0
+    wdamp = 0.0
+    for i in range(n):
+        m = sp.mass[i]
+        I = sp.inertia[i]
+        if recording:
+            epot -= m * (g[0] * sp.pos[i, 0] + g[1] * sp.pos[i, 1] + g[2] * sp.pos[i, 2])
+        if sp.fixed[i]:
+            for a in range(3):
+                sp.pos[i, a] += dt * sp.vel[i, a]
+            if recording:
+                for a in range(3):
+                    ekt += 0.5 * m * sp.vel[i, a] ** 2
+                    ekr += 0.5 * I * sp.angvel[i, a] ** 2
+            continue
+        C = alpha * m + c_abs
+        Cr = alpha * I + alpha_rot_abs
+        step2 = 0.0
+        for a in range(3):
+            f = sp.force[i, a] + m * g[a]
+            v0 = sp.vel[i, a]
+            if local > 0.0:
+                s = f * (v0 + 0.5 * dt * f / m)
+                if s > 0.0:
+                    f *= 1.0 - local
+                elif s < 0.0:
+                    f *= 1.0 + local
+            v1 = ((m / dt - 0.5 * C) * v0 + f) / (m / dt + 0.5 * C)
+            sp.vel[i, a] = v1
+            d = dt * v1
+            sp.pos[i, a] += d
+            step2 += d * d
+            if recording:
+                vm = 0.5 * (v0 + v1)
+                ekt += 0.5 * m * vm * vm
+                wdamp += (f - sp.force[i, a] - m * g[a]) * vm * dt - C * vm * vm * dt
+        wx = sp.angvel[i, 0]
+        wy = sp.angvel[i, 1]
+        wz = sp.angvel[i, 2]
+        for a in range(3):
+            t = sp.torque[i, a]
+            w0 = sp.angvel[i, a]
+            if local > 0.0:
+                s = t * (w0 + 0.5 * dt * t / I)
+                if s > 0.0:
+                    t *= 1.0 - local
+                elif s < 0.0:
+                    t *= 1.0 + local
+            w1 = ((I / dt - 0.5 * Cr) * w0 + t) / (I / dt + 0.5 * Cr)
+            sp.angvel[i, a] = w1
+            if recording:
+                wm = 0.5 * (w0 + w1)
+                ekr += 0.5 * I * wm * wm
+                wdamp += (t - sp.torque[i, a]) * wm * dt - Cr * wm * wm * dt
+        # orientation: q <- dq(ω Δt) ⊗ q (ω in the fixed frame)
+        wx = sp.angvel[i, 0]
+        wy = sp.angvel[i, 1]
+        wz = sp.angvel[i, 2]
+        wn = math.sqrt(wx * wx + wy * wy + wz * wz)
+        if wn > 0.0:
+            h = 0.5 * wn * dt
+            s = math.sin(h) / wn
+            dw, dx, dy, dz = math.cos(h), s * wx, s * wy, s * wz
+            qw, qx, qy, qz = sp.quat[i, 0], sp.quat[i, 1], sp.quat[i, 2], sp.quat[i, 3]
+            nw = dw * qw - dx * qx - dy * qy - dz * qz
+            nx = dw * qx + dx * qw + dy * qz - dz * qy
+            ny = dw * qy - dx * qz + dy * qw + dz * qx
+            nz = dw * qz + dx * qy - dy * qx + dz * qw
+            qn = math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
+            sp.quat[i, 0] = nw / qn
+            sp.quat[i, 1] = nx / qn
+            sp.quat[i, 2] = ny / qn
+            sp.quat[i, 3] = nz / qn
+        rel = math.sqrt(step2) / sp.r[i]
+        if rel > jump or not math.isfinite(rel):
+            jump = rel if math.isfinite(rel) else np.inf
+    return ekt, ekr, epot, jump, wdamp
+
+
+@njit
+def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, alpha, alpha_rot_abs, c_abs, local,
+               dt, rec, rec_count, work):
+    """Run up to ``n_steps`` steps from step ``step0``; stop early for a rebuild or a blow-up.
+
+    ``work`` (2,) accumulates the work done on the spheres by the planes and by damping (energy
+    balance).  Returns (steps done, status, records written)."""
+    n = sp.pos.shape[0]
+    npl = planes.point.shape[0]
+    limit2 = (0.5 * skin) ** 2
+    for s in range(n_steps):
+        step = step0 + s
+        set_plane_velocities(step, planes, ld)
+        recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
+        status, eel = sphere_forces(sp, pairs, planes, law, dt, recording, MAX_OVERLAP_RATIO)
+        if status != OK:
+            return s, BLOWUP, rec_count
+        # work of the planes on the spheres in this step: -F_plane · v_plane Δt
+        for p in range(npl):
+            work[0] -= dt * (planes.force[p, 0] * planes.vel[p, 0] + planes.force[p, 1] * planes.vel[p, 1]
+                             + planes.force[p, 2] * planes.vel[p, 2])
+        ekt, ekr, epot, jump, wdamp = integrate(sp, g, alpha, alpha_rot_abs, c_abs, local, dt, recording)
+        work[1] += wdamp
+        if jump > MAX_STEP_RATIO or not math.isfinite(jump):
+            return s + 1, BLOWUP, rec_count
+        if recording:
+            r = rec_count
+            rec.step[r] = step
+            for p in range(npl):
+                for a in range(3):
+                    rec.plane_force[r, p, a] = planes.force[p, a]
+                    rec.plane_pos[r, p, a] = planes.point[p, a]
+            rec.energy[r, 0] = ekt
+            rec.energy[r, 1] = ekr
+            rec.energy[r, 2] = eel
+            rec.energy[r, 3] = epot
+            rec.energy[r, 4] = work[1]
+            c = 0
+            fmax = 0.0
+            omax = -np.inf
+            for k in range(pairs.fn.shape[0]):
+                if pairs.ovl[k] > 0.0:
+                    c += 1
+                fmax = max(fmax, pairs.fn[k])
+                omax = max(omax, pairs.ovl[k])
+            rec.contacts[r] = c
+            rec.peak[r, 0] = fmax
+            rec.peak[r, 1] = omax
+            for t in range(rec.track_ids.shape[0]):
+                i = rec.track_ids[t]
+                for a in range(3):
+                    # the position at step n and the on-step velocity estimate v_{n+1/2} (leapfrog)
+                    rec.track[r, t, a] = sp.pos[i, a] - dt * sp.vel[i, a]
+                    rec.track[r, t, 3 + a] = sp.vel[i, a]
+            rec_count += 1
+        for p in range(npl):
+            for a in range(3):
+                planes.point[p, a] += dt * planes.vel[p, a]
+        # rebuild test: largest sphere displacement plus largest plane displacement since the build
+        dmax2 = 0.0
+        for i in range(n):
+            d2 = ((sp.pos[i, 0] - sp.ref[i, 0]) ** 2 + (sp.pos[i, 1] - sp.ref[i, 1]) ** 2
+                  + (sp.pos[i, 2] - sp.ref[i, 2]) ** 2)
+            if d2 > dmax2:
+                dmax2 = d2
+        pmax2 = 0.0
+        for p in range(npl):
+            d2 = ((planes.point[p, 0] - planes.ref[p, 0]) ** 2 + (planes.point[p, 1] - planes.ref[p, 1]) ** 2
+                  + (planes.point[p, 2] - planes.ref[p, 2]) ** 2)
+            if d2 > pmax2:
+                pmax2 = d2
+        if (math.sqrt(dmax2) + math.sqrt(pmax2)) ** 2 > limit2:
+            return s + 1, REBUILD, rec_count
+    return n_steps, DONE, rec_count
