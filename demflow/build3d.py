@@ -86,13 +86,15 @@ def build3d(scene: Scene3D) -> Simulation3D:
     plane_mats = [p.material for p in scene.planes]
     used = sorted(set(mats), key=names.index)
     pairs = {}
+    count = {m: mats.count(m) for m in used}
     for a in used:
-        for b in used + [m for m in plane_mats if m not in used]:
-            if b in used and names.index(b) < names.index(a):
-                continue
-            if b not in used and b not in plane_mats:
+        for b in used:  # sphere pairs that exist (a lone sphere of a material never meets its own kind)
+            if names.index(b) < names.index(a) or (a == b and count[a] < 2):
                 continue
             pairs[(a, b)] = scene.law_for(a, b)
+        for b in plane_mats:
+            if (a, b) not in pairs and (b, a) not in pairs:
+                pairs[(a, b)] = scene.law_for(a, b)
     fams = {f for f in FAMILIES_3D for law in pairs.values() if f.accepts(law)}
     if len(fams) != 1:
         raise SceneError(f"scene {scene.name!r} mixes contact-law families ({sorted(f.name for f in fams)}) or has "
@@ -147,6 +149,10 @@ def build3d(scene: Scene3D) -> Simulation3D:
     if isinstance(family, HertzMindlin):
         E = np.array([scene.materials[m].young for m in mats], np.float64)
         nu = np.array([scene.materials[m].poisson for m in mats], np.float64)
+        if not np.all(np.isfinite(E)):
+            k = int(np.argmax(~np.isfinite(E)))
+            raise SceneError(f"sphere {k} has material {mats[k]!r} with young={E[k]}: only a plane can be rigid; "
+                             "give the spheres' material a finite Young's modulus")
         dt_crit = rayleigh_time_step(r, mass, E, nu)
         how = "the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766)"
     else:

@@ -175,7 +175,7 @@ def check_scene3d(scene: Scene3D) -> None:
         if not isinstance(m, Material):
             raise SceneError(f"scene.materials[{name!r}]={m!r} is not a Material; give Material(density=...)")
         _finite(f"scene.materials[{name!r}].density", m.density, nonneg=True)
-        if m.young is not None:
+        if m.young is not None and m.young != math.inf:  # inf: a rigid body (a plane)
             _finite(f"scene.materials[{name!r}].young", m.young, positive=True)
         if m.poisson is not None:
             nu = _finite(f"scene.materials[{name!r}].poisson", m.poisson)

@@ -17,6 +17,7 @@ from .thesis_sedimentation import Sedimentation
 from .thesis_liquefaction import Liquefaction
 from .thesis_simple_shear import SimpleShear
 from .thesis_simple_shear_study import SimpleShearStudy
+from .hertz_impacts import HertzImpacts
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
@@ -25,6 +26,7 @@ CASES[Sedimentation.name] = Sedimentation()
 CASES[Liquefaction.name] = Liquefaction()
 CASES[SimpleShear.name] = SimpleShear()
 CASES[SimpleShearStudy.name] = SimpleShearStudy()
+CASES[HertzImpacts.name] = HertzImpacts()
 
 
 def get_case(name: str) -> Case:

@@ -1,0 +1,223 @@
+"""3D spheres and the Hertz-Mindlin law: pure functions against closed forms, the neighbour list
+against brute force, invariances, energy, determinism, checkpoints and clear errors."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+import demflow as df
+from demflow.contacts.spheres import sphere_pairs, sphere_pairs_brute_force
+from demflow.laws.hertz_mindlin import (effective_modulus, effective_shear_modulus, hertz_force, hertz_impact,
+                                        hertz_stiffness, md_step)
+from demflow.laws.restitution import hertz_restitution, zeta_exact, zeta_linear, zeta_yade
+from demflow.state3d import Box3
+from demflow.tolerances import tol
+
+GLASS = df.Material(density=2800.0, young=4.8e10, poisson=0.2)
+
+
+# ---------------------------------------------------------------------------- pure functions
+def test_effective_moduli_identical_materials():
+    E, nu = 7e10, 0.3
+    G = E / (2 * (1 + nu))
+    assert effective_modulus(E, nu, E, nu) == pytest.approx(E / (2 * (1 - nu * nu)), rel=1e-15)
+    assert effective_shear_modulus(E, nu, E, nu) == pytest.approx(G / (2 * (2 - nu)), rel=1e-15)
+    # a rigid partner: E* = E/(1-ν²)
+    assert effective_modulus(E, nu, math.inf, 0.25) == pytest.approx(E / (1 - nu * nu), rel=1e-15)
+
+
+def test_hertz_stiffness_is_the_derivative_and_energy_the_integral():
+    E, R = 3e10, 0.004
+    for d in (1e-7, 1e-5, 1e-4):
+        h = d * 1e-6
+        num = (hertz_force(E, R, d + h) - hertz_force(E, R, d - h)) / (2 * h)
+        assert hertz_stiffness(E, R, d) == pytest.approx(num, rel=1e-7)
+        work = quad(lambda x: hertz_force(E, R, x), 0, d, epsabs=0, epsrel=1e-12)[0]
+        assert 8 / 15 * E * math.sqrt(R) * d ** 2.5 == pytest.approx(work, rel=1e-10)
+
+
+def _md_path(targets, k0, muN, n=20000):
+    """Drive md_step by displacement along a line through force targets; return (u, T) samples."""
+    T, Tr, direction, br = 0.0, 0.0, 0.0, False
+    u = 0.0
+    us, Ts = [0.0], [0.0]
+    du0 = muN / k0 / n
+    for target in targets:
+        sign = 1.0 if target < T else -1.0  # force on the body opposes the displacement
+        while (T - target) * sign > 0:
+            T, Tr, direction, br = md_step(T, Tr, direction, br, k0, sign * du0, muN)
+            u += sign * du0
+            us.append(u)
+            Ts.append(T)
+    return np.array(us), np.array(Ts)
+
+
+def test_mindlin_deresiewicz_loading_and_unloading_follow_ch3_3_24_and_3_25():
+    """ch3 eq 3.24 (loading) and 3.25 (unloading from T_s), with 8Ga/(2-ν) written k0 = 8G*a:
+    δ(T) = 3μN/(2k0) [1 - (1 - T/μN)^{2/3}], δ_u = 3μN/(2k0) [2(1 - (T_s - T)/2μN)^{2/3} - (1 - T_s/μN)^{2/3} - 1]."""
+    k0, muN = 1e6, 100.0
+    c = 1.5 * muN / k0
+    Ts = 80.0
+    # our sign convention: the force is -T for a positive displacement; load to -T_s, unload to +T_s
+    u, T = _md_path([-Ts, Ts], k0, muN)
+    load = np.nonzero(np.diff(u) > 0)[0]
+    i = load[len(load) // 2]
+    t = -T[i]
+    assert u[i] == pytest.approx(c * (1 - (1 - t / muN) ** (2 / 3)), rel=2e-4)
+    k_turn = np.argmax(u)
+    uT = u[k_turn]
+    assert uT == pytest.approx(c * (1 - (1 - Ts / muN) ** (2 / 3)), rel=2e-4)
+    for frac in (0.25, 0.5, 0.75):
+        j = k_turn + int(frac * (len(u) - k_turn))
+        t = -T[j]  # on the unloading branch, from T_s down
+        du = c * (2 * (1 - (Ts - t) / (2 * muN)) ** (2 / 3) - (1 - Ts / muN) ** (2 / 3) - 1)
+        assert u[j] == pytest.approx(du, rel=1e-3, abs=1e-4 * c)
+
+
+def test_restitution_conventions():
+    # YADE 2023.02a printed phys.betan = 0.2330248576834424 for en = 0.5 (ENGINES probe, this machine)
+    assert zeta_yade(0.5) == pytest.approx(0.2330248576834424, rel=1e-14)
+    for e in (0.1, 0.5, 0.95):
+        assert hertz_restitution(zeta_exact(e)) == pytest.approx(e, abs=1e-8)
+    # negative control: the linear-spring relation is not exact for Hertz (misses by > 1 % at e = 0.3)
+    assert abs(hertz_restitution(zeta_linear(0.3)) - 0.3) > 0.01
+    with pytest.raises(ValueError, match="e=1.5"):
+        zeta_exact(1.5)
+
+
+# ---------------------------------------------------------------------------- neighbour list
+@pytest.mark.parametrize("px,py", [(False, False), (True, False), (True, True)])
+def test_sphere_pairs_match_brute_force(px, py):
+    rng = np.random.default_rng(3)
+    n = 300
+    L = 12.0
+    pos = rng.uniform(0, L, (n, 3))
+    r = rng.uniform(0.2, 0.6, n)
+    box = Box3(periodic_x=px, periodic_y=py, x0=0.0, y0=0.0, lx=L if px else 0.0, ly=L if py else 0.0)
+    pp = np.array([[0, 0, 0.0], [0, 0, L]])
+    pn = np.array([[0, 0, 1.0], [0, 0, -1.0]])
+    fast = sphere_pairs(pos, r, 0.1, box, pp, pn)
+    slow = sphere_pairs_brute_force(pos, r, 0.1, box, pp, pn)
+    for a, b in zip(fast, slow):
+        np.testing.assert_array_equal(a, b)
+    assert len(fast[0]) > 50 and (fast[1] >= n).any()  # sphere pairs and plane pairs were listed
+    if px:
+        assert fast[2][:, 0].any()  # and pairs across the periodic boundary
+
+
+# ---------------------------------------------------------------------------- dynamics
+def _pair_scene(offset=(0.0, 0.0, 0.0), rotation=None, box=df.Box(), name="pair"):
+    R = 0.01
+    p = np.array([[-R * 1.001, 0.0, 0.0], [R * 1.001, 0.003, 0.0]])
+    v = np.array([[10.0, 0.0, 1.0], [-10.0, 0.0, 0.0]])
+    w = np.array([[0.0, 50.0, 0.0], [0.0, 0.0, 0.0]])
+    if rotation is not None:
+        p, v, w = p @ rotation.T, v @ rotation.T, w @ rotation.T
+    p = p + np.asarray(offset)
+    return df.Scene3D(name=name, spheres=df.Spheres(x=p[:, 0], y=p[:, 1], z=p[:, 2], radius=[R, R], material="glass",
+                                                    velocity=v, angular_velocity=w),
+                      materials={"glass": GLASS},
+                      laws={("glass", "glass"): df.HertzMindlinLaw(friction=0.3, restitution=0.7)},
+                      n_steps=120, box=box)
+
+
+def test_oblique_pair_is_invariant_under_rotation_and_translation():
+    a = df.build(_pair_scene()).run()
+    q, _ = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))
+    b = df.build(_pair_scene(offset=(5.0, -2.0, 1.0), rotation=q)).run()
+    assert a.tables()["records"].fn_max.max() > 0 and a.spheres.angvel[1, 2] != 0  # they did collide, with friction
+    va = a.spheres.vel @ q.T
+    np.testing.assert_allclose(b.spheres.vel, va, rtol=0, atol=1e-9 * 10)
+    np.testing.assert_allclose(b.spheres.angvel, a.spheres.angvel @ q.T, rtol=0, atol=1e-7 * 50)
+
+
+def test_pair_across_the_periodic_boundary_equals_the_open_pair():
+    a = df.build(_pair_scene()).run()
+    # the same pair straddling x = 0 of a periodic box [0, 0.2)
+    b = df.build(_pair_scene(offset=(0.0, 0.1, 0.0), box=df.Box(periodic_x=(0.0, 0.2), periodic_y=(0.0, 0.2)),
+                             name="pair-periodic")).run()
+    assert b.pairs.shift[:, 0].any()
+    np.testing.assert_allclose(b.spheres.vel, a.spheres.vel, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(b.unwrapped_positions() - [0.0, 0.1, 0.0], a.spheres.pos, rtol=0, atol=1e-13)
+
+
+def test_head_on_impact_matches_hertz_theory():
+    from demflow.cases.hertz_impacts import impact_scene, run_impact
+
+    m = run_impact(impact_scene("glass", 0.010, 10.0, plane=False), 20.0)
+    for q in ("contact_time", "overlap_max", "force_max"):
+        assert m[q] == pytest.approx(m["reference"][q], rel=tol("hertz.impact").value)
+    # negative control: a 10 % softer modulus is caught
+    soft = effective_modulus(0.9 * 4.8e10, 0.2, 0.9 * 4.8e10, 0.2)
+    r = hertz_impact(soft, 0.005, m["reference"]["overlap_max"] * 0 + 2800 * 4 / 3 * math.pi * 1e-6 / 2, 20.0)
+    assert abs(m["force_max"] / r["force_max"] - 1) > tol("hertz.impact").value
+
+
+def _stack(n=9, dt_fraction=0.02, damping=0.0, name="stack"):
+    """ch3's stack: n balls d = 1 m, m = 1.5708 kg, centres z = 0..n-1, bottom fixed, linear springs."""
+    kn = 36 * 1.5708 * 9.81 / 0.14
+    return df.Scene3D(name=name, spheres=df.Spheres(x=[0.0] * n, y=[0.0] * n, z=list(range(n)), radius=[0.5] * n,
+                                                    material="ball", mass=[1.5708] * n, fixed=[True] + [False] * (n - 1)),
+                      materials={"ball": df.Material(density=1.0)}, laws={("ball", "ball"): df.LinearLaw(kn=kn)},
+                      gravity=(0.0, 0.0, -9.81), dt_fraction=dt_fraction, n_steps=4000,
+                      local_damping=damping, outputs=df.Outputs3D(every=10, track_spheres=(n - 1,)))
+
+
+def test_elastic_stack_conserves_energy():
+    sim = df.build(_stack()).run()
+    rec = sim.tables()["records"]
+    total = rec.kinetic_translation + rec.kinetic_rotation + rec.elastic + rec.potential
+    assert total.iloc[0] == pytest.approx(554.74, rel=1e-5)  # ch3 §3.5.4.1
+    drift = float(np.max(np.abs(total - total.iloc[0])) / total.iloc[0])
+    assert drift < 1e-4
+    assert rec.elastic.max() > 10.0  # the stack did compress
+
+
+def test_same_scene_same_bits_and_checkpoint_resume(tmp_path):
+    a = df.build(_stack(n=5, name="stack-ck"))
+    a.run(700)
+    b = df.build(_stack(n=5, name="stack-ck"))
+    b.run(300)
+    b.save_checkpoint(tmp_path / "ck.npz")
+    c = df.build(_stack(n=5, name="stack-ck")).load_checkpoint(tmp_path / "ck.npz")
+    c.run(400)
+    np.testing.assert_array_equal(a.spheres.pos, c.spheres.pos)
+    np.testing.assert_array_equal(a.spheres.vel, c.spheres.vel)
+    np.testing.assert_array_equal(a.pairs.hist, c.pairs.hist)
+
+
+def test_blow_up_is_reported_with_the_last_good_state(tmp_path, monkeypatch):
+    monkeypatch.setenv("DEMFLOW_BLOWUP_DIR", str(tmp_path))
+    sc = _stack(n=5, name="stack-blowup")
+    sim0 = df.build(sc)
+    sc.dt = 30 * sim0.dt_crit
+    sc.allow_supercritical = True
+    sim = df.build(sc)
+    with pytest.raises(df.BlowUpError) as err:
+        sim.run(4000)
+    df.build(sc).load_checkpoint(err.value.path)
+
+
+def test_supercritical_dt_is_refused():
+    sc = _stack(n=3, name="stack-dt")
+    sc.dt = 1.0
+    with pytest.raises(df.SceneError, match="exceeds the critical estimate"):
+        df.build(sc)
+
+
+@pytest.mark.parametrize("change,field", [
+    (lambda s: s.materials.update(glass=df.Material(density=2800.0, young=4.8e10, poisson=0.7)), "poisson"),
+    (lambda s: s.materials.update(glass=df.Material(density=2800.0)), "elastic constants"),
+    (lambda s: setattr(s, "local_damping", 1.5), "scene.local_damping"),
+    (lambda s: setattr(s, "gravity", (0.0, float("nan"), 0.0)), "scene.gravity"),
+    (lambda s: s.laws.update({("glass", "glass"): df.HertzMindlinLaw(restitution=0.0)}), "restitution"),
+    (lambda s: s.laws.update({("glass", "glass"): df.HertzMindlinLaw(damping="lammps")}), "damping"),
+])
+def test_bad_3d_input_is_refused_clearly(change, field):
+    sc = _pair_scene()
+    change(sc)
+    with pytest.raises(df.SceneError, match=field):
+        df.build(sc)
