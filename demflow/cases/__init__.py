@@ -18,6 +18,7 @@ from .thesis_liquefaction import Liquefaction
 from .thesis_simple_shear import SimpleShear
 from .thesis_simple_shear_study import SimpleShearStudy
 from .hertz_impacts import HertzImpacts
+from .ch3_stack import ElasticStack
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
@@ -27,6 +28,7 @@ CASES[Liquefaction.name] = Liquefaction()
 CASES[SimpleShear.name] = SimpleShear()
 CASES[SimpleShearStudy.name] = SimpleShearStudy()
 CASES[HertzImpacts.name] = HertzImpacts()
+CASES[ElasticStack.name] = ElasticStack()
 
 
 def get_case(name: str) -> Case:
