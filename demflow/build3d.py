@@ -13,7 +13,7 @@ from .laws.linear import Linear
 from .scene import SceneError
 from .scene3d import Scene3D, check_scene3d
 from .simulation3d import Simulation3D
-from .state3d import Box3, Loading3, Planes3, Spheres3
+from .state3d import Box3, Damping3, Loading3, Planes3, Spheres3
 
 FAMILIES_3D = (Linear, HertzMindlin)
 
@@ -172,5 +172,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
                   inertia=inertia, mat=mat, fixed=fixed, force=np.zeros((n, 3)), torque=np.zeros((n, 3)),
                   ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
     return Simulation3D(scene=scene, spheres=sp, planes=planes, loading=loading, law=family, law_params=params,
-                        box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, alpha=d.alpha,
-                        alpha_rot_abs=d.C_rot, c_abs=d.C, local=scene.local_damping, width=width)
+                        box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, width=width,
+                        damping=Damping3(alpha=float(d.alpha), c_abs=float(d.C), c_rot_abs=float(d.C_rot),
+                                         local=float(scene.local_damping), adaptive=bool(scene.adaptive_damping),
+                                         alpha_now=np.zeros(1), prev_r=np.zeros((n, 3)), prev_dx=np.zeros((n, 3))))

@@ -109,6 +109,9 @@ class Scene3D:
     local_damping : Cundall's local non-viscous damping coefficient α_l (Miyata eq 33; YADE's
                     ``NewtonIntegrator.damping``): each force component is reduced by
                     α_l |F| in the direction of the motion, gravity included (YADE's default)
+    adaptive_damping : adaptive dynamic relaxation for static solutions (ch3 §3.5.4.2; Underwood
+                       1983): mass-proportional damping set every step to 2ω_min, ω_min² the
+                       Rayleigh quotient of the last step's force and displacement increments
     dt : the time step, or None for ``dt_fraction`` × the critical estimate (linear: 2√(m/k);
          Hertz: the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766))
     skin : neighbour-list margin [length]; None = 0.2 × mean radius
@@ -122,6 +125,7 @@ class Scene3D:
     planes: list[Plane] = field(default_factory=list)
     damping: GlobalDamping = GlobalDamping()
     local_damping: float = 0.0
+    adaptive_damping: bool = False
     gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     dt: float | None = None
     dt_fraction: float = 0.1
@@ -191,6 +195,8 @@ def check_scene3d(scene: Scene3D) -> None:
                              "or LinearLaw(kn=...)")
         law.check(pair)
     _finite("scene.local_damping", scene.local_damping, nonneg=True)
+    if not isinstance(scene.adaptive_damping, bool):
+        raise SceneError(f"scene.adaptive_damping={scene.adaptive_damping!r}: give True or False")
     if scene.local_damping >= 1.0:
         raise SceneError(f"scene.local_damping={scene.local_damping} must be < 1 (a coefficient of "
                          "Cundall's local damping; YADE uses 0.2-0.4)")

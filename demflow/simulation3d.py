@@ -21,7 +21,7 @@ from .state3d import Pairs3, Records3
 from .stepping3d import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps3
 
 _STATE = ("pos", "vel", "angvel", "quat", "img")
-_RECORDED = ("step", "plane_force", "plane_pos", "energy", "contacts", "peak", "track")
+_RECORDED = ("step", "plane_force", "plane_pos", "energy", "unbalanced", "contacts", "peak", "track")
 
 
 class Simulation3D:
@@ -34,7 +34,7 @@ class Simulation3D:
     CHUNK = 20000  # steps between last-good-state copies
 
     def __init__(self, *, scene, spheres, planes, loading, law, law_params, box, dt, dt_crit, skin,
-                 gravity, alpha, alpha_rot_abs, c_abs, local, width):
+                 gravity, damping, width):
         self.scene = scene
         self.spheres = spheres
         self.planes = planes
@@ -46,10 +46,7 @@ class Simulation3D:
         self.dt_crit = float(dt_crit)
         self.skin = float(skin)
         self.g = np.asarray(gravity, np.float64)
-        self.alpha = float(alpha)
-        self.alpha_rot_abs = float(alpha_rot_abs)
-        self.c_abs = float(c_abs)
-        self.local = float(local)
+        self.damping = damping  # Damping3
         self.width = int(width)
         self.step = 0
         self.work = np.zeros(2)  # work of the planes on the spheres, work of damping (<= 0)
@@ -102,7 +99,7 @@ class Simulation3D:
         ids = np.asarray(self.scene.outputs.track_spheres, np.int64)
         npl = self.n_planes
         return Records3(every=every, step=np.zeros(nrec, np.int64), plane_force=np.zeros((nrec, npl, 3)),
-                        plane_pos=np.zeros((nrec, npl, 3)), energy=np.zeros((nrec, 5)),
+                        plane_pos=np.zeros((nrec, npl, 3)), energy=np.zeros((nrec, 5)), unbalanced=np.zeros(nrec),
                         contacts=np.zeros(nrec, np.int64), peak=np.zeros((nrec, 2)), track_ids=ids, track=np.zeros((nrec, ids.size, 6)))
 
     def run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
@@ -139,8 +136,7 @@ class Simulation3D:
                     t0 = time.perf_counter()
                     done, status, rec_count = run_steps3(
                         stop - self.step, self.step, self.skin, self.spheres, self.pairs, self.planes,
-                        self.loading, self.law_params, self.g, self.alpha, self.alpha_rot_abs, self.c_abs,
-                        self.local, self.dt, rec, rec_count, self.work)
+                        self.loading, self.law_params, self.g, self.damping, self.dt, rec, rec_count, self.work)
                     self.dem_s += time.perf_counter() - t0
                     self.step += done
                     if bar is not None:
@@ -213,7 +209,7 @@ class Simulation3D:
             cols = {"step": r["step"], "t": r["step"] * self.dt, "contacts": r["contacts"],
                     "kinetic_translation": r["energy"][:, 0], "kinetic_rotation": r["energy"][:, 1],
                     "elastic": r["energy"][:, 2], "potential": r["energy"][:, 3], "damping_work": r["energy"][:, 4],
-                    "fn_max": r["peak"][:, 0], "overlap_max": r["peak"][:, 1]}
+                    "fn_max": r["peak"][:, 0], "overlap_max": r["peak"][:, 1], "unbalanced": r["unbalanced"]}
             for q, name in enumerate(names):
                 for a, ax in enumerate("xyz"):
                     cols[f"{name}_f{ax}"] = r["plane_force"][:, q, a]
@@ -227,13 +223,16 @@ class Simulation3D:
     # ------------------------------------------------------------------ state I/O
     def _state_arrays(self) -> dict:
         out = {k: getattr(self.spheres, k) for k in _STATE}
-        out.update(plane_point=self.planes.point, plane_vel=self.planes.vel, plane_force=self.planes.force,
+        out.update(alpha_now=self.damping.alpha_now, prev_r=self.damping.prev_r, prev_dx=self.damping.prev_dx,
+                   plane_point=self.planes.point, plane_vel=self.planes.vel, plane_force=self.planes.force,
                    pair_i=self.pairs.i, pair_j=self.pairs.j, hist=self.pairs.hist, work=self.work)
         return out
 
     def _set_state(self, s: dict) -> None:
         for k in _STATE:
             getattr(self.spheres, k)[:] = s[k]
+        for k in ("alpha_now", "prev_r", "prev_dx"):
+            getattr(self.damping, k)[:] = s[k]
         self.planes.point[:] = s["plane_point"]
         self.planes.vel[:] = s["plane_vel"]
         self.planes.force[:] = s["plane_force"]

@@ -57,10 +57,21 @@ Records3 = namedtuple("Records3", [
     "plane_force",  # (R, np, 3)
     "plane_pos",   # (R, np, 3)
     "energy",      # (R, 5): kinetic (translation), kinetic (rotation), elastic, potential -m g·x, dissipated
+    "unbalanced",  # (R,) mean |out-of-balance force| of free spheres / mean contact normal force (YADE's)
     "contacts",    # (R,) int64 number of touching pairs (sphere-sphere and sphere-plane)
     "peak",        # (R, 2) largest normal force and largest overlap over the listed pairs (a gap is < 0)
     "track_ids",   # (nt,) int64 tracked spheres
     "track",       # (R, nt, 6) position and velocity of the tracked spheres
+])
+
+Damping3 = namedtuple("Damping3", [
+    "alpha",        # mass-proportional damping C = αm, C* = αI [1/time] (ch3 eq 3.19, Miyata eq 32)
+    "c_abs", "c_rot_abs",  # absolute global dashpots C [force·time/length], C* [force·length·time]
+    "local",        # Cundall's local non-viscous damping coefficient (Miyata eq 33)
+    "adaptive",     # bool: adaptive dynamic relaxation (Underwood 1983; ch3 §3.5.4.2)
+    "alpha_now",    # (1,) the adaptive α of the current step [1/time]
+    "prev_r",       # (n, 3) out-of-balance force of the previous step (adaptive)
+    "prev_dx",      # (n, 3) displacement of the previous step (adaptive)
 ])
 
 Box3 = namedtuple("Box3", [

@@ -60,10 +60,37 @@ def set_plane_velocities(step, planes, ld):
 
 
 @njit
-def integrate(sp, g, alpha, alpha_rot_abs, c_abs, local, dt, recording):
+def adapt_damping(sp, g, dmp):
+    """Adaptive dynamic relaxation (Underwood 1983), ch3 §3.5.4.2's "adaptive equilibrium DR": the
+    lowest frequency of the assembly is estimated every step from the Rayleigh quotient of the last
+    step, ω² = Σ Δx·(R_old - R_new) / Σ m Δx² (R the out-of-balance force, Δx the last step), and
+    the mass-proportional damping is set to its critical value α = 2ω.  Called after the contact
+    forces of the step; keeps α when the quotient is not positive."""
+    num = 0.0
+    den = 0.0
+    for i in range(sp.pos.shape[0]):
+        if sp.fixed[i]:
+            continue
+        m = sp.mass[i]
+        for a in range(3):
+            r = sp.force[i, a] + m * g[a]
+            dx = dmp.prev_dx[i, a]
+            num += dx * (dmp.prev_r[i, a] - r)
+            den += m * dx * dx
+            dmp.prev_r[i, a] = r
+    if num > 0.0 and den > 0.0:
+        dmp.alpha_now[0] = 2.0 * math.sqrt(num / den)
+
+
+@njit
+def integrate(sp, g, dmp, dt, recording):
     """Advance free spheres by one step (module docstring).  Returns (kinetic translation,
     kinetic rotation, potential, largest step length / radius, damping work this step)."""
     n = sp.pos.shape[0]
+    alpha = dmp.alpha + (dmp.alpha_now[0] if dmp.adaptive else 0.0)
+    c_abs = dmp.c_abs
+    alpha_rot_abs = dmp.c_rot_abs
+    local = dmp.local
     ekt = 0.0
     ekr = 0.0
     epot = 0.0
@@ -98,6 +125,8 @@ def integrate(sp, g, alpha, alpha_rot_abs, c_abs, local, dt, recording):
             sp.vel[i, a] = v1
             d = dt * v1
             sp.pos[i, a] += d
+            if dmp.adaptive:
+                dmp.prev_dx[i, a] = d
             step2 += d * d
             if recording:
                 vm = 0.5 * (v0 + v1)
@@ -147,8 +176,7 @@ def integrate(sp, g, alpha, alpha_rot_abs, c_abs, local, dt, recording):
 
 
 @njit
-def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, alpha, alpha_rot_abs, c_abs, local,
-               dt, rec, rec_count, work):
+def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, dmp, dt, rec, rec_count, work):
     """Run up to ``n_steps`` steps from step ``step0``; stop early for a rebuild or a blow-up.
 
     ``work`` (2,) accumulates the work done on the spheres by the planes and by damping (energy
@@ -167,7 +195,24 @@ def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, alpha, alpha
         for p in range(npl):
             work[0] -= dt * (planes.force[p, 0] * planes.vel[p, 0] + planes.force[p, 1] * planes.vel[p, 1]
                              + planes.force[p, 2] * planes.vel[p, 2])
-        ekt, ekr, epot, jump, wdamp = integrate(sp, g, alpha, alpha_rot_abs, c_abs, local, dt, recording)
+        if dmp.adaptive:
+            adapt_damping(sp, g, dmp)
+        if recording:
+            rsum = 0.0
+            nfree = 0
+            for i in range(n):
+                if not sp.fixed[i]:
+                    nfree += 1
+                    rsum += math.sqrt((sp.force[i, 0] + sp.mass[i] * g[0]) ** 2 + (sp.force[i, 1] + sp.mass[i] * g[1]) ** 2
+                                      + (sp.force[i, 2] + sp.mass[i] * g[2]) ** 2)
+            fsum = 0.0
+            nc = 0
+            for k in range(pairs.fn.shape[0]):
+                if pairs.fn[k] > 0.0:
+                    fsum += pairs.fn[k]
+                    nc += 1
+            rec.unbalanced[rec_count] = (rsum / nfree) / (fsum / nc) if nfree > 0 and nc > 0 and fsum > 0 else np.inf
+        ekt, ekr, epot, jump, wdamp = integrate(sp, g, dmp, dt, recording)
         work[1] += wdamp
         if jump > MAX_STEP_RATIO or not math.isfinite(jump):
             return s + 1, BLOWUP, rec_count

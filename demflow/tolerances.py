@@ -159,6 +159,20 @@ TOLERANCES = {
         1e-4,
         "Acceptance of issue 13: the stack's total energy conserved to 1e-4 over the run (relative to the initial "
         "554.74 J), largest deviation over 10 s.", absolute=True, kind="exact"),
+    "ch3.top-calibrated": Tolerance(
+        1e-4,
+        "CALIBRATION: ch3 gives no stiffness; kn was chosen so that the static top sits at 7.86 m (printed to 3 "
+        "digits), so this agreement is by construction; 1e-4 allows the residual motion at the end of the run.",
+        kind="calibration"),
+    "ch3.stack-statics": Tolerance(
+        1e-6,
+        "At rest each contact carries the weight of the balls above it exactly; the runs end with an unbalanced "
+        "force ratio below 1e-7 (measured), so 1e-6 relative is the statics, not the dynamics.", absolute=True,
+        kind="exact"),
+    "ch3.chain-arrival": Tolerance(
+        2e-2,
+        "Acceptance of issue 13: the chain's arrival time within 2 % of the √(k/m) wave-speed prediction.",
+        kind="exact"),
 }
 
 

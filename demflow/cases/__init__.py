@@ -18,7 +18,8 @@ from .thesis_liquefaction import Liquefaction
 from .thesis_simple_shear import SimpleShear
 from .thesis_simple_shear_study import SimpleShearStudy
 from .hertz_impacts import HertzImpacts
-from .ch3_stack import ElasticStack
+from .ch3_stack import DampedStack, ElasticStack
+from .ch3_chain import ImpulseChain
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
@@ -29,6 +30,8 @@ CASES[SimpleShear.name] = SimpleShear()
 CASES[SimpleShearStudy.name] = SimpleShearStudy()
 CASES[HertzImpacts.name] = HertzImpacts()
 CASES[ElasticStack.name] = ElasticStack()
+CASES[DampedStack.name] = DampedStack()
+CASES[ImpulseChain.name] = ImpulseChain()
 
 
 def get_case(name: str) -> Case:
