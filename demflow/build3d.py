@@ -168,8 +168,13 @@ def build3d(scene: Scene3D) -> Simulation3D:
                              "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
                              "allow_supercritical=True")
     d = scene.damping
+    P = np.zeros((n, 16))
+    P[:, 9] = r
+    P[:, 10] = mass
+    P[:, 11] = mat
+    P[:, 12] = fixed
     sp = Spheres3(pos=np.stack([x, y, z], axis=1), vel=vel, angvel=angvel, quat=quat, r=r, mass=mass,
-                  inertia=inertia, mat=mat, fixed=fixed, force=np.zeros((n, 3)), torque=np.zeros((n, 3)),
+                  inertia=inertia, mat=mat, fixed=fixed, FM=np.zeros((n, 6)), P=P,
                   ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
     return Simulation3D(scene=scene, spheres=sp, planes=planes, loading=loading, law=family, law_params=params,
                         box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, width=width,

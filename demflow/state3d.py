@@ -20,8 +20,8 @@ Spheres3 = namedtuple("Spheres3", [
     "inertia",  # 2/5 mR² [mass·length²]
     "mat",      # material index (int64)
     "fixed",    # int8: 1 = not integrated (moves with its velocity)
-    "force",    # (n, 3) contact force sum of the last step [force]
-    "torque",   # (n, 3) contact moment sum of the last step [force·length]
+    "FM",       # (n, 6) contact force (0-2) [force] and moment (3-5) [force·length] sums of the last step
+    "P",        # (n, 16) packed rows the pair pass reads: pos, vel, angvel, r, mass, mat, fixed, 0...
     "ref",      # (n, 3) position at the last neighbour-list build [length]
     "img",      # (n, 2) int64 periodic image counters along x and y (unwrapped = pos + img·L)
 ])

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from .contacts.spheres import OK, sphere_forces
+from .contacts.spheres import OK, pack_rows, sphere_forces
 from .jit import njit
 
 DONE = 0
@@ -73,7 +73,7 @@ def adapt_damping(sp, g, dmp):
             continue
         m = sp.mass[i]
         for a in range(3):
-            r = sp.force[i, a] + m * g[a]
+            r = sp.FM[i, a] + m * g[a]
             dx = dmp.prev_dx[i, a]
             num += dx * (dmp.prev_r[i, a] - r)
             den += m * dx * dx
@@ -111,9 +111,14 @@ def integrate(sp, g, dmp, dt, recording):
             continue
         C = alpha * m + c_abs
         Cr = alpha * I + alpha_rot_abs
+        # v1 = ((m/Δt - C/2) v0 + F) / (m/Δt + C/2), one division per sphere
+        a_t = m / dt - 0.5 * C
+        b_t = 1.0 / (m / dt + 0.5 * C)
+        a_r = I / dt - 0.5 * Cr
+        b_r = 1.0 / (I / dt + 0.5 * Cr)
         step2 = 0.0
         for a in range(3):
-            f = sp.force[i, a] + m * g[a]
+            f = sp.FM[i, a] + m * g[a]
             v0 = sp.vel[i, a]
             if local > 0.0:
                 s = f * (v0 + 0.5 * dt * f / m)
@@ -121,7 +126,7 @@ def integrate(sp, g, dmp, dt, recording):
                     f *= 1.0 - local
                 elif s < 0.0:
                     f *= 1.0 + local
-            v1 = ((m / dt - 0.5 * C) * v0 + f) / (m / dt + 0.5 * C)
+            v1 = (a_t * v0 + f) * b_t
             sp.vel[i, a] = v1
             d = dt * v1
             sp.pos[i, a] += d
@@ -131,12 +136,9 @@ def integrate(sp, g, dmp, dt, recording):
             if recording:
                 vm = 0.5 * (v0 + v1)
                 ekt += 0.5 * m * vm * vm
-                wdamp += (f - sp.force[i, a] - m * g[a]) * vm * dt - C * vm * vm * dt
-        wx = sp.angvel[i, 0]
-        wy = sp.angvel[i, 1]
-        wz = sp.angvel[i, 2]
+                wdamp += (f - sp.FM[i, a] - m * g[a]) * vm * dt - C * vm * vm * dt
         for a in range(3):
-            t = sp.torque[i, a]
+            t = sp.FM[i, 3 + a]
             w0 = sp.angvel[i, a]
             if local > 0.0:
                 s = t * (w0 + 0.5 * dt * t / I)
@@ -144,12 +146,12 @@ def integrate(sp, g, dmp, dt, recording):
                     t *= 1.0 - local
                 elif s < 0.0:
                     t *= 1.0 + local
-            w1 = ((I / dt - 0.5 * Cr) * w0 + t) / (I / dt + 0.5 * Cr)
+            w1 = (a_r * w0 + t) * b_r
             sp.angvel[i, a] = w1
             if recording:
                 wm = 0.5 * (w0 + w1)
                 ekr += 0.5 * I * wm * wm
-                wdamp += (t - sp.torque[i, a]) * wm * dt - Cr * wm * wm * dt
+                wdamp += (t - sp.FM[i, 3 + a]) * wm * dt - Cr * wm * wm * dt
         # orientation: q <- dq(ω Δt) ⊗ q (ω in the fixed frame)
         wx = sp.angvel[i, 0]
         wy = sp.angvel[i, 1]
@@ -188,6 +190,7 @@ def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, dmp, dt, rec
         step = step0 + s
         set_plane_velocities(step, planes, ld)
         recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
+        pack_rows(sp)
         status, eel = sphere_forces(sp, pairs, planes, law, dt, recording, MAX_OVERLAP_RATIO)
         if status != OK:
             return s, BLOWUP, rec_count
@@ -203,8 +206,8 @@ def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, dmp, dt, rec
             for i in range(n):
                 if not sp.fixed[i]:
                     nfree += 1
-                    rsum += math.sqrt((sp.force[i, 0] + sp.mass[i] * g[0]) ** 2 + (sp.force[i, 1] + sp.mass[i] * g[1]) ** 2
-                                      + (sp.force[i, 2] + sp.mass[i] * g[2]) ** 2)
+                    rsum += math.sqrt((sp.FM[i, 0] + sp.mass[i] * g[0]) ** 2 + (sp.FM[i, 1] + sp.mass[i] * g[1]) ** 2
+                                      + (sp.FM[i, 2] + sp.mass[i] * g[2]) ** 2)
             fsum = 0.0
             nc = 0
             for k in range(pairs.fn.shape[0]):

@@ -26,7 +26,6 @@ from ..laws.base import law_energy3, law_force3
 
 OK = 0
 BLOWUP_OVERLAP = 1
-BLOWUP_NONFINITE = 2
 
 
 @njit
@@ -216,18 +215,27 @@ def carry_history(old_i, old_j, old_hist, new_i, new_j, n_keys: int) -> np.ndarr
 
 
 @njit
+def pack_rows(sp):
+    """Copy the moving state into the packed rows P the pair pass reads (one 128-byte row per sphere:
+    a touching pair then reads two rows instead of fourteen scattered values)."""
+    P = sp.P
+    for i in range(sp.pos.shape[0]):
+        for a in range(3):
+            P[i, a] = sp.pos[i, a]
+            P[i, 3 + a] = sp.vel[i, a]
+            P[i, 6 + a] = sp.angvel[i, a]
+
+
+@njit
 def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
-    """One pass over the pair list: contact forces and moments into sp.force / sp.torque (zeroed
-    here) and planes.force, per-pair outputs into pairs.fn/ft/ovl/slide.  Returns (status, elastic
-    energy) — the energy only when ``recording``."""
-    n = sp.pos.shape[0]
-    pos = sp.pos
-    vel = sp.vel
-    w = sp.angvel
-    F = sp.force
-    M = sp.torque
-    F[:] = 0.0
-    M[:] = 0.0
+    """One pass over the pair list: contact forces and moments into sp.FM (force 0-2, moment 3-5;
+    zeroed here) and planes.force, per-pair outputs into pairs.fn/ft/ovl/slide.  Reads the packed
+    rows sp.P (:func:`pack_rows`).  Returns (status, elastic energy) — the energy only when
+    ``recording``.  A non-finite force is caught by the integrator's step-length test."""
+    n = sp.P.shape[0]
+    P = sp.P
+    FM = sp.FM
+    FM[:] = 0.0
     planes.force[:] = 0.0
     hist = pairs.hist
     energy = 0.0
@@ -235,53 +243,59 @@ def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
     for k in range(pairs.i.shape[0]):
         i = pairs.i[k]
         j = pairs.j[k]
+        ri = P[i, 9]
         if j < n:
-            dx = pos[j, 0] + pairs.shift[k, 0] - pos[i, 0]
-            dy = pos[j, 1] + pairs.shift[k, 1] - pos[i, 1]
-            dz = pos[j, 2] + pairs.shift[k, 2] - pos[i, 2]
-            dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-            overlap = sp.r[i] + sp.r[j] - dist
-            if overlap <= 0.0:
-                for c in range(hist.shape[1]):
-                    hist[k, c] = 0.0
-                pairs.fn[k] = 0.0
-                pairs.ft[k, 0] = 0.0
-                pairs.ft[k, 1] = 0.0
-                pairs.ft[k, 2] = 0.0
-                pairs.ovl[k] = overlap
-                pairs.slide[k] = 0
+            dx = P[j, 0] + pairs.shift[k, 0] - P[i, 0]
+            dy = P[j, 1] + pairs.shift[k, 1] - P[i, 1]
+            dz = P[j, 2] + pairs.shift[k, 2] - P[i, 2]
+            rj = P[j, 9]
+            d2 = dx * dx + dy * dy + dz * dz
+            rs = ri + rj
+            if d2 >= rs * rs:
+                if pairs.ovl[k] >= 0.0 or hist[k, 0] != 0.0 or hist[k, 1] != 0.0 or hist[k, 2] != 0.0:
+                    for c in range(hist.shape[1]):
+                        hist[k, c] = 0.0
+                    pairs.fn[k] = 0.0
+                    pairs.ft[k, 0] = 0.0
+                    pairs.ft[k, 1] = 0.0
+                    pairs.ft[k, 2] = 0.0
+                    pairs.slide[k] = 0
+                pairs.ovl[k] = rs - math.sqrt(d2) if recording else -1.0
                 continue
-            nx = dx / dist
-            ny = dy / dist
-            nz = dz / dist
-            ai = sp.r[i] - 0.5 * overlap
-            aj = sp.r[j] - 0.5 * overlap
+            dist = math.sqrt(d2)
+            overlap = rs - dist
+            inv = 1.0 / dist
+            nx = dx * inv
+            ny = dy * inv
+            nz = dz * inv
+            ai = ri - 0.5 * overlap
+            aj = rj - 0.5 * overlap
             # contact-point velocities: v + ω × arm (arm_i = ai n, arm_j = -aj n)
-            vix = vel[i, 0] + ai * (w[i, 1] * nz - w[i, 2] * ny)
-            viy = vel[i, 1] + ai * (w[i, 2] * nx - w[i, 0] * nz)
-            viz = vel[i, 2] + ai * (w[i, 0] * ny - w[i, 1] * nx)
-            vjx = vel[j, 0] - aj * (w[j, 1] * nz - w[j, 2] * ny)
-            vjy = vel[j, 1] - aj * (w[j, 2] * nx - w[j, 0] * nz)
-            vjz = vel[j, 2] - aj * (w[j, 0] * ny - w[j, 1] * nx)
-            mi = sp.mass[i]
-            mj = sp.mass[j]
-            if sp.fixed[j]:
+            vix = P[i, 3] + ai * (P[i, 7] * nz - P[i, 8] * ny)
+            viy = P[i, 4] + ai * (P[i, 8] * nx - P[i, 6] * nz)
+            viz = P[i, 5] + ai * (P[i, 6] * ny - P[i, 7] * nx)
+            vjx = P[j, 3] - aj * (P[j, 7] * nz - P[j, 8] * ny)
+            vjy = P[j, 4] - aj * (P[j, 8] * nx - P[j, 6] * nz)
+            vjz = P[j, 5] - aj * (P[j, 6] * ny - P[j, 7] * nx)
+            mi = P[i, 10]
+            mj = P[j, 10]
+            if P[j, 12] != 0.0:
                 meff = mi
-            elif sp.fixed[i]:
+            elif P[i, 12] != 0.0:
                 meff = mj
             else:
                 meff = mi * mj / (mi + mj)
-            rstar = sp.r[i] * sp.r[j] / (sp.r[i] + sp.r[j])
-            mb = sp.mat[j]
-            rmin = min(sp.r[i], sp.r[j])
+            rstar = ri * rj / rs
+            mb = int(P[j, 11])
+            rmin = min(ri, rj)
         else:
             p = j - n
             nx = -planes.normal[p, 0]
             ny = -planes.normal[p, 1]
             nz = -planes.normal[p, 2]
-            h = -((pos[i, 0] - planes.point[p, 0]) * nx + (pos[i, 1] - planes.point[p, 1]) * ny
-                  + (pos[i, 2] - planes.point[p, 2]) * nz)
-            overlap = sp.r[i] - h
+            h = -((P[i, 0] - planes.point[p, 0]) * nx + (P[i, 1] - planes.point[p, 1]) * ny
+                  + (P[i, 2] - planes.point[p, 2]) * nz)
+            overlap = ri - h
             if overlap <= 0.0:
                 for c in range(hist.shape[1]):
                     hist[k, c] = 0.0
@@ -292,18 +306,18 @@ def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
                 pairs.ovl[k] = overlap
                 pairs.slide[k] = 0
                 continue
-            ai = sp.r[i] - 0.5 * overlap
+            ai = ri - 0.5 * overlap
             aj = 0.0
-            vix = vel[i, 0] + ai * (w[i, 1] * nz - w[i, 2] * ny)
-            viy = vel[i, 1] + ai * (w[i, 2] * nx - w[i, 0] * nz)
-            viz = vel[i, 2] + ai * (w[i, 0] * ny - w[i, 1] * nx)
+            vix = P[i, 3] + ai * (P[i, 7] * nz - P[i, 8] * ny)
+            viy = P[i, 4] + ai * (P[i, 8] * nx - P[i, 6] * nz)
+            viz = P[i, 5] + ai * (P[i, 6] * ny - P[i, 7] * nx)
             vjx = planes.vel[p, 0]
             vjy = planes.vel[p, 1]
             vjz = planes.vel[p, 2]
-            meff = sp.mass[i]
-            rstar = sp.r[i]
+            meff = P[i, 10]
+            rstar = ri
             mb = planes.mat[p]
-            rmin = sp.r[i]
+            rmin = ri
         if overlap > max_overlap_ratio * rmin:
             status = BLOWUP_OVERLAP
         rvx = vix - vjx
@@ -317,9 +331,9 @@ def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
         hx = hist[k, 0]
         hy = hist[k, 1]
         hz = hist[k, 2]
-        h2 = hx * hx + hy * hy + hz * hz
-        if h2 > 0.0:
-            hn = hx * nx + hy * ny + hz * nz
+        hn = hx * nx + hy * ny + hz * nz
+        if hn != 0.0:
+            h2 = hx * hx + hy * hy + hz * hz
             tx = hx - hn * nx
             ty = hy - hn * ny
             tz = hz - hn * nz
@@ -333,30 +347,29 @@ def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
                 hist[k, 0] = 0.0
                 hist[k, 1] = 0.0
                 hist[k, 2] = 0.0
-        Fn, Tx, Ty, Tz, sliding = law_force3(law, hist, k, sp.mat[i], mb, meff, rstar, overlap, vn,
+        ma = int(P[i, 11])
+        Fn, Tx, Ty, Tz, sliding = law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn,
                                              vtx, vty, vtz, nx, ny, nz, dt)
         fx = -Fn * nx + Tx
         fy = -Fn * ny + Ty
         fz = -Fn * nz + Tz
-        if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(fz)):
-            status = BLOWUP_NONFINITE
         # moment arm × T: (a n) × T
         cx = ny * Tz - nz * Ty
         cy = nz * Tx - nx * Tz
         cz = nx * Ty - ny * Tx
-        F[i, 0] += fx
-        F[i, 1] += fy
-        F[i, 2] += fz
-        M[i, 0] += ai * cx
-        M[i, 1] += ai * cy
-        M[i, 2] += ai * cz
+        FM[i, 0] += fx
+        FM[i, 1] += fy
+        FM[i, 2] += fz
+        FM[i, 3] += ai * cx
+        FM[i, 4] += ai * cy
+        FM[i, 5] += ai * cz
         if j < n:
-            F[j, 0] -= fx
-            F[j, 1] -= fy
-            F[j, 2] -= fz
-            M[j, 0] += aj * cx
-            M[j, 1] += aj * cy
-            M[j, 2] += aj * cz
+            FM[j, 0] -= fx
+            FM[j, 1] -= fy
+            FM[j, 2] -= fz
+            FM[j, 3] += aj * cx
+            FM[j, 4] += aj * cy
+            FM[j, 5] += aj * cz
         else:
             planes.force[j - n, 0] -= fx
             planes.force[j - n, 1] -= fy
@@ -368,5 +381,5 @@ def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
         pairs.ovl[k] = overlap
         pairs.slide[k] = 1 if sliding else 0
         if recording:
-            energy = law_energy3(law, energy, hist, k, sp.mat[i], mb, rstar, overlap)
+            energy = law_energy3(law, energy, hist, k, ma, mb, rstar, overlap)
     return status, energy
