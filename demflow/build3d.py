@@ -13,7 +13,7 @@ from .laws.linear import Linear
 from .scene import SceneError
 from .scene3d import Scene3D, check_scene3d
 from .simulation3d import Simulation3D
-from .state3d import Box3, Damping3, Loading3, Planes3, Spheres3
+from .state3d import Box3, Damping3, Loading3, Planes3, Spheres3, Triangles3
 
 FAMILIES_3D = (Linear, HertzMindlin)
 
@@ -83,7 +83,8 @@ def build3d(scene: Scene3D) -> Simulation3D:
     quat[:, 0] = 1.0
 
     # laws: every pair of materials that can meet
-    plane_mats = [p.material for p in scene.planes]
+    walls = list(scene.planes) + list(scene.meshes)  # wall bodies: planes, then meshes
+    plane_mats = [p.material for p in walls]
     used = sorted(set(mats), key=names.index)
     pairs = {}
     count = {m: mats.count(m) for m in used}
@@ -104,32 +105,46 @@ def build3d(scene: Scene3D) -> Simulation3D:
     params = family.params()
     width = family.history_width(3)
 
-    # planes
-    npl = len(scene.planes)
-    point = np.array([p.point for p in scene.planes], np.float64).reshape(npl, 3)
-    normal = np.array([p.normal for p in scene.planes], np.float64).reshape(npl, 3)
-    if npl:
-        normal /= np.linalg.norm(normal, axis=1)[:, None]
+    # wall bodies: planes (point, unit normal), then meshes (reference point = first vertex)
+    npl = len(walls)
+    point = np.array([p.point if not hasattr(p, "triangles") else np.asarray(p.vertices, np.float64)[0]
+                      for p in walls], np.float64).reshape(npl, 3)
+    normal = np.array([p.normal if not hasattr(p, "triangles") else (0.0, 0.0, 0.0) for p in walls],
+                      np.float64).reshape(npl, 3)
+    is_mesh = np.array([hasattr(p, "triangles") for p in walls], np.int8)
+    for q in range(npl):
+        if not is_mesh[q]:
+            normal[q] /= np.linalg.norm(normal[q])
     planes = Planes3(point=point, normal=normal, vel=np.zeros((npl, 3)),
                      mat=np.array([index[m] for m in plane_mats], np.int64), force=np.zeros((npl, 3)),
-                     ref=point.copy())
-    K = max([len(p.phases) for p in scene.planes] + [1])
+                     ref=point.copy(), is_mesh=is_mesh)
+    tv, tw = [], []
+    for q, w in enumerate(walls):
+        if is_mesh[q]:
+            v = np.asarray(w.vertices, np.float64)
+            t = np.asarray(w.triangles, np.int64)
+            tv.append(np.concatenate([v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]], axis=1))
+            tw.append(np.full(len(t), q, np.int64))
+    tris = Triangles3(v=np.concatenate(tv) if tv else np.zeros((0, 9)),
+                      wall=np.concatenate(tw) if tw else np.zeros(0, np.int64))
+    K = max([len(p.phases) for p in walls] + [1])
     ps = np.zeros((npl, K), np.int64)
     pe = np.zeros((npl, K), np.int64)
     pv = np.zeros((npl, K, 3))
-    for q, p in enumerate(scene.planes):
+    for q, p in enumerate(walls):
         t = 0
         for k, ph in enumerate(p.phases):
             ps[q, k] = t
             t += int(ph.cycles)
             pe[q, k] = t
             pv[q, k] = ph.velocity
+    servo = [getattr(p, "servo", None) for p in walls]
     loading = Loading3(phase_start=ps, phase_end=pe, phase_v=pv,
-                       servo_on=np.array([p.servo is not None for p in scene.planes], np.int8),
-                       servo_start=np.array([p.servo.start if p.servo else 0 for p in scene.planes], np.int64),
-                       servo_F=np.array([p.servo.force if p.servo else 1.0 for p in scene.planes]),
-                       servo_G=np.array([p.servo.gain if p.servo else 0.0 for p in scene.planes]),
-                       servo_vmax=np.array([p.servo.v_max if p.servo else 0.0 for p in scene.planes]))
+                       servo_on=np.array([sv is not None for sv in servo], np.int8),
+                       servo_start=np.array([sv.start if sv else 0 for sv in servo], np.int64),
+                       servo_F=np.array([sv.force if sv else 1.0 for sv in servo]),
+                       servo_G=np.array([sv.gain if sv else 0.0 for sv in servo]),
+                       servo_vmax=np.array([sv.v_max if sv else 0.0 for sv in servo]))
 
     skin = float(scene.skin) if scene.skin is not None else 0.2 * float(r.mean())
     b = scene.box
@@ -176,7 +191,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
     sp = Spheres3(pos=np.stack([x, y, z], axis=1), vel=vel, angvel=angvel, quat=quat, r=r, mass=mass,
                   inertia=inertia, mat=mat, fixed=fixed, FM=np.zeros((n, 6)), P=P,
                   ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
-    return Simulation3D(scene=scene, spheres=sp, planes=planes, loading=loading, law=family, law_params=params,
+    return Simulation3D(scene=scene, spheres=sp, planes=planes, tris=tris, loading=loading, law=family, law_params=params,
                         box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, width=width,
                         damping=Damping3(alpha=float(d.alpha), c_abs=float(d.C), c_rot_abs=float(d.C_rot),
                                          local=float(scene.local_damping), adaptive=bool(scene.adaptive_damping),

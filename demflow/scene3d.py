@@ -85,6 +85,21 @@ class Plane:
 
 
 @dataclass(frozen=True)
+class TriangleMesh:
+    """A rigid wall made of triangles (a silo, a funnel, a shaped plate): ``vertices`` (nv, 3)
+    [length], ``triangles`` (nt, 3) vertex indices.  A sphere touches a triangle at the triangle's
+    point closest to its centre (face, edge or vertex); an edge or vertex contact counts only when no
+    face of the same mesh touches that sphere, and once for triangles sharing it.  ``phases``
+    translate the whole mesh.  Meshes are not imaged across periodic boundaries."""
+
+    name: str
+    vertices: Sequence[Sequence[float]]
+    triangles: Sequence[Sequence[int]]
+    material: str
+    phases: tuple[PlanePhase, ...] = ()
+
+
+@dataclass(frozen=True)
 class Outputs3D:
     """What a 3D run records.
 
@@ -123,6 +138,7 @@ class Scene3D:
     materials: dict[str, Material]
     laws: dict
     planes: list[Plane] = field(default_factory=list)
+    meshes: list[TriangleMesh] = field(default_factory=list)
     damping: GlobalDamping = GlobalDamping()
     local_damping: float = 0.0
     adaptive_damping: bool = False
@@ -214,6 +230,35 @@ def check_scene3d(scene: Scene3D) -> None:
     if isinstance(o.every, bool) or not isinstance(o.every, (int, np.integer)) or o.every < 0:
         raise SceneError(f"scene.outputs.every={o.every!r}: give an integer >= 0")
     names = set()
+    for k, mh in enumerate(scene.meshes):
+        check_identifier("mesh", mh.name)
+        if mh.name in names:
+            raise SceneError(f"scene.meshes[{k}].name={mh.name!r} is used twice; give each wall its own name")
+        names.add(mh.name)
+        try:
+            v = np.asarray(mh.vertices, dtype=np.float64)
+            t = np.asarray(mh.triangles)
+        except (TypeError, ValueError):
+            raise SceneError(f"scene.meshes[{k}]: vertices and triangles must be numeric arrays") from None
+        if v.ndim != 2 or v.shape[1] != 3 or not np.all(np.isfinite(v)):
+            raise SceneError(f"scene.meshes[{k}].vertices has shape {v.shape} or non-finite values; give (nv, 3) "
+                             "finite coordinates")
+        if t.ndim != 2 or t.shape[1] != 3 or t.shape[0] == 0 or not np.issubdtype(t.dtype, np.integer):
+            raise SceneError(f"scene.meshes[{k}].triangles has shape {t.shape} (dtype {t.dtype}); give (nt, 3) "
+                             "integer vertex indices")
+        if t.min() < 0 or t.max() >= len(v):
+            raise SceneError(f"scene.meshes[{k}].triangles index vertex {int(t.max())}; there are {len(v)} vertices")
+        a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+        area2 = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+        if np.any(area2 <= 0):
+            raise SceneError(f"scene.meshes[{k}] triangle {int(np.argmax(area2 <= 0))} is degenerate (zero area); "
+                             "remove it")
+        if mh.material not in scene.materials:
+            raise SceneError(f"scene.meshes[{k}].material={mh.material!r} is not declared; add it to scene.materials")
+        for q, ph in enumerate(mh.phases):
+            if isinstance(ph.cycles, bool) or not isinstance(ph.cycles, (int, np.integer)) or ph.cycles < 0:
+                raise SceneError(f"scene.meshes[{k}].phases[{q}].cycles={ph.cycles!r}: give an integer >= 0")
+            _vector3(f"scene.meshes[{k}].phases[{q}].velocity", ph.velocity)
     for k, p in enumerate(scene.planes):
         check_identifier("plane", p.name)
         if p.name in names:

@@ -33,11 +33,12 @@ class Simulation3D:
 
     CHUNK = 20000  # steps between last-good-state copies
 
-    def __init__(self, *, scene, spheres, planes, loading, law, law_params, box, dt, dt_crit, skin,
+    def __init__(self, *, scene, spheres, planes, tris, loading, law, law_params, box, dt, dt_crit, skin,
                  gravity, damping, width):
         self.scene = scene
         self.spheres = spheres
         self.planes = planes
+        self.tris = tris
         self.loading = loading
         self.law = law
         self.law_params = law_params
@@ -83,9 +84,10 @@ class Simulation3D:
                 k = np.floor((sp.pos[:, a] - lo) / length).astype(np.int64)
                 sp.pos[:, a] -= k * length
                 sp.img[:, a] += k
-        i, j, shift = sphere_pairs(sp.pos, sp.r, self.skin, self.box, self.planes.point, self.planes.normal)
+        i, j, shift = sphere_pairs(sp.pos, sp.r, self.skin, self.box, self.planes.point, self.planes.normal,
+                                   self.planes.is_mesh, self.tris.v)
         old = self.pairs
-        hist = carry_history(old.i, old.j, old.hist, i, j, self.n + self.n_planes)
+        hist = carry_history(old.i, old.j, old.hist, i, j, self.n + self.n_planes + self.tris.v.shape[0])
         m = i.size
         self.pairs = Pairs3(i=i, j=j, hist=hist, shift=shift, fn=np.zeros(m), ft=np.zeros((m, 3)),
                             ovl=np.zeros(m), slide=np.zeros(m, np.int8))
@@ -136,7 +138,7 @@ class Simulation3D:
                     t0 = time.perf_counter()
                     done, status, rec_count = run_steps3(
                         stop - self.step, self.step, self.skin, self.spheres, self.pairs, self.planes,
-                        self.loading, self.law_params, self.g, self.damping, self.dt, rec, rec_count, self.work)
+                        self.tris, self.loading, self.law_params, self.g, self.damping, self.dt, rec, rec_count, self.work)
                     self.dem_s += time.perf_counter() - t0
                     self.step += done
                     if bar is not None:
@@ -199,7 +201,7 @@ class Simulation3D:
         contacts = pd.DataFrame({"i": p.i[on], "j": p.j[on], "wall": p.j[on] >= self.n, "fn": p.fn[on],
                                  "ftx": p.ft[on, 0], "fty": p.ft[on, 1], "ftz": p.ft[on, 2],
                                  "overlap": p.ovl[on], "sliding": p.slide[on].astype(bool)})
-        names = [pl.name for pl in self.scene.planes]
+        names = [pl.name for pl in self.scene.planes] + [mh.name for mh in self.scene.meshes]
         planes = pd.DataFrame({"name": names, "px": self.planes.point[:, 0], "py": self.planes.point[:, 1],
                                "pz": self.planes.point[:, 2], "fx": self.planes.force[:, 0],
                                "fy": self.planes.force[:, 1], "fz": self.planes.force[:, 2]})
@@ -224,7 +226,7 @@ class Simulation3D:
     def _state_arrays(self) -> dict:
         out = {k: getattr(self.spheres, k) for k in _STATE}
         out.update(alpha_now=self.damping.alpha_now, prev_r=self.damping.prev_r, prev_dx=self.damping.prev_dx,
-                   plane_point=self.planes.point, plane_vel=self.planes.vel, plane_force=self.planes.force,
+                   plane_point=self.planes.point, tri_v=self.tris.v, plane_vel=self.planes.vel, plane_force=self.planes.force,
                    pair_i=self.pairs.i, pair_j=self.pairs.j, hist=self.pairs.hist, work=self.work)
         return out
 
@@ -234,6 +236,7 @@ class Simulation3D:
         for k in ("alpha_now", "prev_r", "prev_dx"):
             getattr(self.damping, k)[:] = s[k]
         self.planes.point[:] = s["plane_point"]
+        self.tris.v[:] = s["tri_v"]
         self.planes.vel[:] = s["plane_vel"]
         self.planes.force[:] = s["plane_force"]
         self.work[:] = s["work"]

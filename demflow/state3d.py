@@ -27,7 +27,8 @@ Spheres3 = namedtuple("Spheres3", [
 ])
 
 Pairs3 = namedtuple("Pairs3", [
-    "i", "j",    # listed pairs in key order, i < j (int64); j >= n: plane j - n
+    "i", "j",    # listed pairs in key order, i < j (int64); n <= j < n + nw: plane j - n;
+                 # j >= n + nw: triangle j - n - nw
     "hist",      # (m, width) contact history (the law's; columns 0-2 the tangential vector)
     "shift",     # (m, 3) image shift added to j's centre (periodic boxes)
     "fn",        # (m,) total normal force of the last step [force] (0: apart)
@@ -37,11 +38,18 @@ Pairs3 = namedtuple("Pairs3", [
 ])
 
 Planes3 = namedtuple("Planes3", [
+    # every wall body: the planes, then the triangle meshes (a mesh: its reference point, no normal)
     "point", "normal",  # (np, 3) a point [length] and the unit normal towards the spheres
     "vel",              # (np, 3) velocity of the current step [length/time]
     "mat",              # material index (int64)
     "force",            # (np, 3) force of the spheres on the plane [force]
     "ref",              # (np, 3) point at the last neighbour-list build
+    "is_mesh",          # (np,) int8: 1 = a triangle mesh (its triangles in Triangles3)
+])
+
+Triangles3 = namedtuple("Triangles3", [
+    "v",     # (nt, 9) current vertices a, b, c [length]; they translate with their wall body
+    "wall",  # (nt,) int64 the wall body (index into Planes3) each triangle belongs to
 ])
 
 Loading3 = namedtuple("Loading3", [

@@ -10,7 +10,7 @@ One step (ch3 eqs 3.19-3.20, the leapfrog scheme of the thesis §2.2.4 in 3D):
    v_{n+1/2} = ((m/Δt - C/2) v_{n-1/2} + F) / (m/Δt + C/2), x_{n+1} = x_n + Δt v_{n+1/2};
    the same for ω with the moment of inertia and the moment (a sphere's inertia is isotropic, so
    Euler's equations reduce to this); the orientation quaternion turns by |ω|Δt about ω;
-4. planes move by Δt × their velocity;
+4. planes and triangle meshes move by Δt × their velocity;
 5. the neighbour list is rebuilt (by the caller) once a sphere or plane has moved half the skin.
 
 Energies on recorded steps: kinetic with the on-step velocity (v_{n-1/2} + v_{n+1/2})/2, elastic and
@@ -178,7 +178,7 @@ def integrate(sp, g, dmp, dt, recording):
 
 
 @njit
-def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, dmp, dt, rec, rec_count, work):
+def run_steps3(n_steps, step0, skin, sp, pairs, planes, tris, ld, law, g, dmp, dt, rec, rec_count, work):
     """Run up to ``n_steps`` steps from step ``step0``; stop early for a rebuild or a blow-up.
 
     ``work`` (2,) accumulates the work done on the spheres by the planes and by damping (energy
@@ -191,7 +191,7 @@ def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, dmp, dt, rec
         set_plane_velocities(step, planes, ld)
         recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
         pack_rows(sp)
-        status, eel = sphere_forces(sp, pairs, planes, law, dt, recording, MAX_OVERLAP_RATIO)
+        status, eel = sphere_forces(sp, pairs, planes, tris, law, dt, recording, MAX_OVERLAP_RATIO)
         if status != OK:
             return s, BLOWUP, rec_count
         # work of the planes on the spheres in this step: -F_plane · v_plane Δt
@@ -252,6 +252,11 @@ def run_steps3(n_steps, step0, skin, sp, pairs, planes, ld, law, g, dmp, dt, rec
         for p in range(npl):
             for a in range(3):
                 planes.point[p, a] += dt * planes.vel[p, a]
+        for t in range(tris.v.shape[0]):  # triangles translate with their wall body
+            w = tris.wall[t]
+            for c in range(3):
+                for a in range(3):
+                    tris.v[t, 3 * c + a] += dt * planes.vel[w, a]
         # rebuild test: largest sphere displacement plus largest plane displacement since the build
         dmax2 = 0.0
         for i in range(n):

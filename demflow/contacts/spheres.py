@@ -119,10 +119,86 @@ def _sphere_candidates(pos, r, skin, lo, side, nc, periodic, period, count_only,
     return m
 
 
+FACE = 0
+EDGE = 1
+VERTEX = 2
+
+
+@njit
+def closest_point_triangle(px, py, pz, v):
+    """The point of triangle v = (a, b, c) (9 numbers) closest to p, and where it lies (FACE, EDGE or
+    VERTEX): the Voronoi-region test on barycentric coordinates (Ericson 2005, §5.1.5)."""
+    ax, ay, az = v[0], v[1], v[2]
+    abx, aby, abz = v[3] - ax, v[4] - ay, v[5] - az
+    acx, acy, acz = v[6] - ax, v[7] - ay, v[8] - az
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        return ax, ay, az, VERTEX
+    bpx, bpy, bpz = px - v[3], py - v[4], pz - v[5]
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    if d3 >= 0.0 and d4 <= d3:
+        return v[3], v[4], v[5], VERTEX
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        t = d1 / (d1 - d3)
+        return ax + t * abx, ay + t * aby, az + t * abz, EDGE
+    cpx, cpy, cpz = px - v[6], py - v[7], pz - v[8]
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    if d6 >= 0.0 and d5 <= d6:
+        return v[6], v[7], v[8], VERTEX
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        t = d2 / (d2 - d6)
+        return ax + t * acx, ay + t * acy, az + t * acz, EDGE
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return v[3] + t * (v[6] - v[3]), v[4] + t * (v[7] - v[4]), v[5] + t * (v[8] - v[5]), EDGE
+    den = 1.0 / (va + vb + vc)
+    t1 = vb * den
+    t2 = vc * den
+    return ax + abx * t1 + acx * t2, ay + aby * t1 + acy * t2, az + abz * t1 + acz * t2, FACE
+
+
+@njit
+def _triangle_candidates(pos, r, skin, tv, count_only, out_i, out_t):
+    """Sphere-triangle pairs within r + skin (brute force over triangles: O(n × n_triangles),
+    with an early bounding-box rejection)."""
+    m = 0
+    for i in range(pos.shape[0]):
+        reach = r[i] + skin
+        for t in range(tv.shape[0]):
+            lo0 = min(tv[t, 0], tv[t, 3], tv[t, 6]) - reach
+            hi0 = max(tv[t, 0], tv[t, 3], tv[t, 6]) + reach
+            if pos[i, 0] < lo0 or pos[i, 0] > hi0:
+                continue
+            lo1 = min(tv[t, 1], tv[t, 4], tv[t, 7]) - reach
+            hi1 = max(tv[t, 1], tv[t, 4], tv[t, 7]) + reach
+            if pos[i, 1] < lo1 or pos[i, 1] > hi1:
+                continue
+            lo2 = min(tv[t, 2], tv[t, 5], tv[t, 8]) - reach
+            hi2 = max(tv[t, 2], tv[t, 5], tv[t, 8]) + reach
+            if pos[i, 2] < lo2 or pos[i, 2] > hi2:
+                continue
+            cx, cy, cz, _ = closest_point_triangle(pos[i, 0], pos[i, 1], pos[i, 2], tv[t])
+            d2 = (cx - pos[i, 0]) ** 2 + (cy - pos[i, 1]) ** 2 + (cz - pos[i, 2]) ** 2
+            if d2 < reach * reach:
+                if not count_only:
+                    out_i[m] = i
+                    out_t[m] = t
+                m += 1
+    return m
+
+
 def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point: np.ndarray,
-                 planes_normal: np.ndarray):
+                 planes_normal: np.ndarray, is_mesh: np.ndarray | None = None, tri_v: np.ndarray | None = None):
     """The neighbour list (i, j, shift) in key order: sphere pairs within ``skin`` by cells, then
-    sphere-plane pairs (j = n + plane) within r + skin."""
+    sphere-plane pairs (j = n + wall) within r + skin, then sphere-triangle pairs
+    (j = n + n_walls + triangle) whose closest point is within r + skin."""
     n = pos.shape[0]
     side0 = 2.0 * (float(r.max()) if n else 1.0) + skin
     periodic = np.array([box.periodic_x, box.periodic_y, False])
@@ -158,17 +234,29 @@ def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point:
     order = np.lexsort((pj, pi))
     pi, pj, ps = pi[order], pj[order], ps[order]
     wi, wj = [], []
-    for p in range(planes_point.shape[0]):
+    nw = planes_point.shape[0]
+    for p in range(nw):
+        if is_mesh is not None and is_mesh[p]:
+            continue
         h = (pos - planes_point[p]) @ planes_normal[p]
         near = np.nonzero(h < r + skin)[0]
         wi.append(near)
         wj.append(np.full(near.size, n + p, np.int64))
+    if tri_v is not None and tri_v.shape[0]:
+        e = np.empty(0, np.int64)
+        mt = _triangle_candidates(pos, r, skin, tri_v, True, e, e)
+        ti = np.empty(mt, np.int64)
+        tt = np.empty(mt, np.int64)
+        _triangle_candidates(pos, r, skin, tri_v, False, ti, tt)
+        wi.append(ti)
+        wj.append(n + nw + tt)
     if wi:
         qi = np.concatenate(wi)
         qj = np.concatenate(wj)
         order = np.lexsort((qj, qi))
         qi, qj = qi[order], qj[order]
-        allk = np.concatenate([pi * (n + planes_point.shape[0]) + pj, qi * (n + planes_point.shape[0]) + qj])
+        nk = n + nw + (0 if tri_v is None else tri_v.shape[0])
+        allk = np.concatenate([pi * nk + pj, qi * nk + qj])
         ii = np.concatenate([pi, qi])
         jj = np.concatenate([pj, qj])
         ss = np.concatenate([ps, np.zeros((qi.size, 3))])
@@ -227,7 +315,65 @@ def pack_rows(sp):
 
 
 @njit
-def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
+def triangle_contacts(P, pairs, n, nw, tris):
+    """Closest points of the listed sphere-triangle pairs (in pair order) and which of them act:
+    a face contact always; an edge or vertex contact only when no face of the same mesh touches
+    that sphere, and once per point (two triangles sharing the edge or vertex give the same point).
+    Returns (points (mt, 3), active (mt,) int8)."""
+    m = pairs.i.shape[0]
+    mt = 0
+    for k in range(m):
+        if pairs.j[k] >= n + nw:
+            mt += 1
+    cp = np.empty((mt, 3))
+    region = np.empty(mt, np.int64)
+    touch = np.zeros(mt, np.int8)
+    active = np.zeros(mt, np.int8)
+    q = 0
+    k = 0
+    while k < m:
+        if pairs.j[k] < n + nw:
+            k += 1
+            continue
+        i = pairs.i[k]
+        q0 = q
+        while k < m and pairs.i[k] == i and pairs.j[k] >= n + nw:
+            t = pairs.j[k] - n - nw
+            cx, cy, cz, reg = closest_point_triangle(P[i, 0], P[i, 1], P[i, 2], tris.v[t])
+            cp[q, 0] = cx
+            cp[q, 1] = cy
+            cp[q, 2] = cz
+            region[q] = reg
+            d2 = (cx - P[i, 0]) ** 2 + (cy - P[i, 1]) ** 2 + (cz - P[i, 2]) ** 2
+            touch[q] = 1 if d2 < P[i, 9] * P[i, 9] else 0
+            q += 1
+            k += 1
+        tol2 = (1e-9 * P[i, 9]) ** 2
+        for a in range(q0, q):
+            if not touch[a]:
+                continue
+            wa = tris.wall[pairs.j[k - (q - a)] - n - nw]
+            if region[a] == FACE:
+                active[a] = 1
+                continue
+            ok = True
+            for b in range(q0, q):
+                wb = tris.wall[pairs.j[k - (q - b)] - n - nw]
+                if b == a or wb != wa or not touch[b]:
+                    continue
+                if region[b] == FACE:
+                    ok = False
+                    break
+                if b < a and active[b] and ((cp[a, 0] - cp[b, 0]) ** 2 + (cp[a, 1] - cp[b, 1]) ** 2
+                                            + (cp[a, 2] - cp[b, 2]) ** 2) <= tol2:
+                    ok = False
+                    break
+            active[a] = 1 if ok else 0
+    return cp, active
+
+
+@njit
+def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio):
     """One pass over the pair list: contact forces and moments into sp.FM (force 0-2, moment 3-5;
     zeroed here) and planes.force, per-pair outputs into pairs.fn/ft/ovl/slide.  Reads the packed
     rows sp.P (:func:`pack_rows`).  Returns (status, elastic energy) — the energy only when
@@ -240,11 +386,47 @@ def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
     hist = pairs.hist
     energy = 0.0
     status = 0
+    nw = planes.point.shape[0]
+    tcp, tact = triangle_contacts(P, pairs, n, nw, tris)
+    q = -1
     for k in range(pairs.i.shape[0]):
         i = pairs.i[k]
         j = pairs.j[k]
         ri = P[i, 9]
-        if j < n:
+        if j >= n + nw:  # a triangle
+            q += 1
+            w = tris.wall[j - n - nw]
+            dx = tcp[q, 0] - P[i, 0]
+            dy = tcp[q, 1] - P[i, 1]
+            dz = tcp[q, 2] - P[i, 2]
+            dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+            overlap = ri - dist
+            if not tact[q] or dist == 0.0:
+                for c in range(hist.shape[1]):
+                    hist[k, c] = 0.0
+                pairs.fn[k] = 0.0
+                pairs.ft[k, 0] = 0.0
+                pairs.ft[k, 1] = 0.0
+                pairs.ft[k, 2] = 0.0
+                pairs.ovl[k] = min(overlap, 0.0)
+                pairs.slide[k] = 0
+                continue
+            nx = dx / dist
+            ny = dy / dist
+            nz = dz / dist
+            ai = ri - 0.5 * overlap
+            aj = 0.0
+            vix = P[i, 3] + ai * (P[i, 7] * nz - P[i, 8] * ny)
+            viy = P[i, 4] + ai * (P[i, 8] * nx - P[i, 6] * nz)
+            viz = P[i, 5] + ai * (P[i, 6] * ny - P[i, 7] * nx)
+            vjx = planes.vel[w, 0]
+            vjy = planes.vel[w, 1]
+            vjz = planes.vel[w, 2]
+            meff = P[i, 10]
+            rstar = ri
+            mb = planes.mat[w]
+            rmin = ri
+        elif j < n:
             dx = P[j, 0] + pairs.shift[k, 0] - P[i, 0]
             dy = P[j, 1] + pairs.shift[k, 1] - P[i, 1]
             dz = P[j, 2] + pairs.shift[k, 2] - P[i, 2]
@@ -371,9 +553,10 @@ def sphere_forces(sp, pairs, planes, law, dt, recording, max_overlap_ratio):
             FM[j, 4] += aj * cy
             FM[j, 5] += aj * cz
         else:
-            planes.force[j - n, 0] -= fx
-            planes.force[j - n, 1] -= fy
-            planes.force[j - n, 2] -= fz
+            w = j - n if j < n + nw else tris.wall[j - n - nw]
+            planes.force[w, 0] -= fx
+            planes.force[w, 1] -= fy
+            planes.force[w, 2] -= fz
         pairs.fn[k] = Fn
         pairs.ft[k, 0] = Tx
         pairs.ft[k, 1] = Ty
