@@ -189,7 +189,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
     P[:, 11] = mat
     P[:, 12] = fixed
     sp = Spheres3(pos=np.stack([x, y, z], axis=1), vel=vel, angvel=angvel, quat=quat, r=r, mass=mass,
-                  inertia=inertia, mat=mat, fixed=fixed, FM=np.zeros((n, 6)), P=P,
+                  inertia=inertia, inv_r2=1.0 / r ** 2, mat=mat, fixed=fixed, FM=np.zeros((n, 6)), P=P,
                   ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
     return Simulation3D(scene=scene, spheres=sp, planes=planes, tris=tris, loading=loading, law=family, law_params=params,
                         box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, width=width,

@@ -107,11 +107,14 @@ class Outputs3D:
             every this many steps (0: never)
     snapshots : steps at which sphere states and contacts are kept
     track_spheres : sphere indices whose position and velocity are recorded every ``every`` steps
+    orientation : integrate each sphere's orientation quaternion (it does not change a sphere's
+                  dynamics: off unless the outputs need it)
     """
 
     every: int = 1
     snapshots: tuple[int, ...] = ()
     track_spheres: tuple[int, ...] = ()
+    orientation: bool = False
 
 
 @dataclass

@@ -100,7 +100,7 @@ class Simulation3D:
         nrec = min(n_steps // every + 1, self.CHUNK // every + 1) if every > 0 else 0
         ids = np.asarray(self.scene.outputs.track_spheres, np.int64)
         npl = self.n_planes
-        return Records3(every=every, step=np.zeros(nrec, np.int64), plane_force=np.zeros((nrec, npl, 3)),
+        return Records3(every=every, orient=bool(self.scene.outputs.orientation), step=np.zeros(nrec, np.int64), plane_force=np.zeros((nrec, npl, 3)),
                         plane_pos=np.zeros((nrec, npl, 3)), energy=np.zeros((nrec, 5)), unbalanced=np.zeros(nrec),
                         contacts=np.zeros(nrec, np.int64), peak=np.zeros((nrec, 2)), track_ids=ids, track=np.zeros((nrec, ids.size, 6)))
 
@@ -195,6 +195,7 @@ class Simulation3D:
         spheres = pd.DataFrame({"id": np.arange(self.n), "x": pos[:, 0], "y": pos[:, 1], "z": pos[:, 2],
                                 "vx": sp.vel[:, 0], "vy": sp.vel[:, 1], "vz": sp.vel[:, 2],
                                 "wx": sp.angvel[:, 0], "wy": sp.angvel[:, 1], "wz": sp.angvel[:, 2],
+                                "qw": sp.quat[:, 0], "qx": sp.quat[:, 1], "qy": sp.quat[:, 2], "qz": sp.quat[:, 3],
                                 "r": sp.r, "mass": sp.mass})
         p = self.pairs
         on = p.ovl > 0

@@ -18,6 +18,7 @@ Spheres3 = namedtuple("Spheres3", [
     "r",        # radius [length]
     "mass",     # [mass]
     "inertia",  # 2/5 mR² [mass·length²]
+    "inv_r2",   # 1/R² (the step-length test)
     "mat",      # material index (int64)
     "fixed",    # int8: 1 = not integrated (moves with its velocity)
     "FM",       # (n, 6) contact force (0-2) [force] and moment (3-5) [force·length] sums of the last step
@@ -61,6 +62,7 @@ Loading3 = namedtuple("Loading3", [
 
 Records3 = namedtuple("Records3", [
     "every",       # record every this many steps (0: never)
+    "orient",      # bool: integrate the orientation quaternions (Outputs3D.orientation)
     "step",        # (R,) int64
     "plane_force",  # (R, np, 3)
     "plane_pos",   # (R, np, 3)

@@ -83,7 +83,7 @@ def adapt_damping(sp, g, dmp):
 
 
 @njit
-def integrate(sp, g, dmp, dt, recording):
+def integrate(sp, g, dmp, dt, recording, orient):
     """Advance free spheres by one step (module docstring).  Returns (kinetic translation,
     kinetic rotation, potential, largest step length / radius, damping work this step)."""
     n = sp.pos.shape[0]
@@ -94,8 +94,9 @@ def integrate(sp, g, dmp, dt, recording):
     ekt = 0.0
     ekr = 0.0
     epot = 0.0
-    jump = 0.0
+    jump2 = 0.0
     wdamp = 0.0
+    inv_dt = 1.0 / dt
     for i in range(n):
         m = sp.mass[i]
         I = sp.inertia[i]
@@ -112,10 +113,10 @@ def integrate(sp, g, dmp, dt, recording):
         C = alpha * m + c_abs
         Cr = alpha * I + alpha_rot_abs
         # v1 = ((m/Δt - C/2) v0 + F) / (m/Δt + C/2), one division per sphere
-        a_t = m / dt - 0.5 * C
-        b_t = 1.0 / (m / dt + 0.5 * C)
-        a_r = I / dt - 0.5 * Cr
-        b_r = 1.0 / (I / dt + 0.5 * Cr)
+        a_t = m * inv_dt - 0.5 * C
+        b_t = 1.0 / (m * inv_dt + 0.5 * C)
+        a_r = I * inv_dt - 0.5 * Cr
+        b_r = 1.0 / (I * inv_dt + 0.5 * Cr)
         step2 = 0.0
         for a in range(3):
             f = sp.FM[i, a] + m * g[a]
@@ -152,29 +153,29 @@ def integrate(sp, g, dmp, dt, recording):
                 wm = 0.5 * (w0 + w1)
                 ekr += 0.5 * I * wm * wm
                 wdamp += (t - sp.FM[i, 3 + a]) * wm * dt - Cr * wm * wm * dt
-        # orientation: q <- dq(ω Δt) ⊗ q (ω in the fixed frame)
-        wx = sp.angvel[i, 0]
-        wy = sp.angvel[i, 1]
-        wz = sp.angvel[i, 2]
-        wn = math.sqrt(wx * wx + wy * wy + wz * wz)
-        if wn > 0.0:
-            h = 0.5 * wn * dt
-            s = math.sin(h) / wn
-            dw, dx, dy, dz = math.cos(h), s * wx, s * wy, s * wz
-            qw, qx, qy, qz = sp.quat[i, 0], sp.quat[i, 1], sp.quat[i, 2], sp.quat[i, 3]
-            nw = dw * qw - dx * qx - dy * qy - dz * qz
-            nx = dw * qx + dx * qw + dy * qz - dz * qy
-            ny = dw * qy - dx * qz + dy * qw + dz * qx
-            nz = dw * qz + dx * qy - dy * qx + dz * qw
-            qn = math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
-            sp.quat[i, 0] = nw / qn
-            sp.quat[i, 1] = nx / qn
-            sp.quat[i, 2] = ny / qn
-            sp.quat[i, 3] = nz / qn
-        rel = math.sqrt(step2) / sp.r[i]
-        if rel > jump or not math.isfinite(rel):
-            jump = rel if math.isfinite(rel) else np.inf
-    return ekt, ekr, epot, jump, wdamp
+        if orient:  # q <- dq(ω Δt) ⊗ q (ω in the fixed frame); only when the scene asks for orientations
+            wx = sp.angvel[i, 0]
+            wy = sp.angvel[i, 1]
+            wz = sp.angvel[i, 2]
+            wn = math.sqrt(wx * wx + wy * wy + wz * wz)
+            if wn > 0.0:
+                h = 0.5 * wn * dt
+                s = math.sin(h) / wn
+                dw, dx, dy, dz = math.cos(h), s * wx, s * wy, s * wz
+                qw, qx, qy, qz = sp.quat[i, 0], sp.quat[i, 1], sp.quat[i, 2], sp.quat[i, 3]
+                nw = dw * qw - dx * qx - dy * qy - dz * qz
+                nx = dw * qx + dx * qw + dy * qz - dz * qy
+                ny = dw * qy - dx * qz + dy * qw + dz * qx
+                nz = dw * qz + dx * qy - dy * qx + dz * qw
+                qi = 1.0 / math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
+                sp.quat[i, 0] = nw * qi
+                sp.quat[i, 1] = nx * qi
+                sp.quat[i, 2] = ny * qi
+                sp.quat[i, 3] = nz * qi
+        rel2 = step2 * sp.inv_r2[i]
+        if not rel2 <= jump2:  # also catches NaN
+            jump2 = rel2 if rel2 == rel2 else np.inf
+    return ekt, ekr, epot, math.sqrt(jump2), wdamp
 
 
 @njit
@@ -215,7 +216,7 @@ def run_steps3(n_steps, step0, skin, sp, pairs, planes, tris, ld, law, g, dmp, d
                     fsum += pairs.fn[k]
                     nc += 1
             rec.unbalanced[rec_count] = (rsum / nfree) / (fsum / nc) if nfree > 0 and nc > 0 and fsum > 0 else np.inf
-        ekt, ekr, epot, jump, wdamp = integrate(sp, g, dmp, dt, recording)
+        ekt, ekr, epot, jump, wdamp = integrate(sp, g, dmp, dt, recording, rec.orient)
         work[1] += wdamp
         if jump > MAX_STEP_RATIO or not math.isfinite(jump):
             return s + 1, BLOWUP, rec_count

@@ -329,9 +329,13 @@ class HertzMindlin(LawFamily):
         return isinstance(law, HertzMindlinLaw)
 
     def history_width(self, dim: int = 3) -> int:
+        """3 columns (the tangential vector); 8 when some pair uses Mindlin-Deresiewicz (its direction,
+        reversal force and branch state): a scene pays only for the history it declares."""
         if dim != 3:
             raise ValueError("the Hertz-Mindlin law is implemented for 3D spheres (dim=3)")
-        return HISTORY_WIDTH_3D
+        if any(law.tangential == "mindlin-deresiewicz" for law in self.laws_by_pair.values()):
+            return HISTORY_WIDTH_3D
+        return 3
 
     def tables(self) -> dict:
         from ..scene import SceneError
