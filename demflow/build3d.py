@@ -195,4 +195,5 @@ def build3d(scene: Scene3D) -> Simulation3D:
                         box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, width=width,
                         damping=Damping3(alpha=float(d.alpha), c_abs=float(d.C), c_rot_abs=float(d.C_rot),
                                          local=float(scene.local_damping), adaptive=bool(scene.adaptive_damping),
-                                         alpha_now=np.zeros(1), prev_r=np.zeros((n, 3)), prev_dx=np.zeros((n, 3))))
+                                         alpha_now=np.zeros(1), prev_r=np.zeros((n if scene.adaptive_damping else 0, 3)),
+                                         prev_dx=np.zeros((n if scene.adaptive_damping else 0, 3))))

@@ -80,8 +80,8 @@ Damping3 = namedtuple("Damping3", [
     "local",        # Cundall's local non-viscous damping coefficient (Miyata eq 33)
     "adaptive",     # bool: adaptive dynamic relaxation (Underwood 1983; ch3 §3.5.4.2)
     "alpha_now",    # (1,) the adaptive α of the current step [1/time]
-    "prev_r",       # (n, 3) out-of-balance force of the previous step (adaptive)
-    "prev_dx",      # (n, 3) displacement of the previous step (adaptive)
+    "prev_r",       # (n, 3) out-of-balance force of the previous step (adaptive; (0, 3) otherwise)
+    "prev_dx",      # (n, 3) displacement of the previous step (adaptive; (0, 3) otherwise)
 ])
 
 Box3 = namedtuple("Box3", [
