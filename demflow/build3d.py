@@ -191,9 +191,37 @@ def build3d(scene: Scene3D) -> Simulation3D:
     sp = Spheres3(pos=np.stack([x, y, z], axis=1), vel=vel, angvel=angvel, quat=quat, r=r, mass=mass,
                   inertia=inertia, inv_r2=1.0 / r ** 2, mat=mat, fixed=fixed, FM=np.zeros((n, 6)), P=P,
                   ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
-    return Simulation3D(scene=scene, spheres=sp, planes=planes, tris=tris, loading=loading, law=family, law_params=params,
+    sim = Simulation3D(scene=scene, spheres=sp, planes=planes, tris=tris, loading=loading, law=family, law_params=params,
                         box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, width=width,
                         damping=Damping3(alpha=float(d.alpha), c_abs=float(d.C), c_rot_abs=float(d.C_rot),
                                          local=float(scene.local_damping), adaptive=bool(scene.adaptive_damping),
                                          alpha_now=np.zeros(1), prev_r=np.zeros((n if scene.adaptive_damping else 0, 3)),
                                          prev_dx=np.zeros((n if scene.adaptive_damping else 0, 3))))
+    _refuse_initial_overlaps(sim)
+    return sim
+
+
+def _refuse_initial_overlaps(sim: Simulation3D) -> None:
+    """An overlap beyond the blow-up limit at step 0 is bad input, not a blow-up: name the pair."""
+    from .contacts.spheres import pack_rows, sphere_forces
+    from .stepping3d import MAX_OVERLAP_RATIO
+
+    hist = sim.pairs.hist.copy()
+    pack_rows(sim.spheres)
+    status, _ = sphere_forces(sim.spheres, sim.pairs, sim.planes, sim.tris, sim.law_params, sim.dt, True,
+                              MAX_OVERLAP_RATIO)
+    sim.pairs.hist[:] = hist
+    sim.spheres.FM[:] = 0.0
+    sim.planes.force[:] = 0.0
+    if status:
+        p = sim.pairs
+        r = sim.spheres.r
+        n, nw = sim.n, sim.n_planes
+        rmin = np.where(p.j < n, np.minimum(r[p.i], r[np.minimum(p.j, n - 1)]), r[p.i])
+        k = int(np.argmax(p.ovl / rmin))
+        j = int(p.j[k])
+        names = [pl.name for pl in sim.scene.planes] + [m.name for m in sim.scene.meshes]
+        other = (f"sphere {j}" if j < n else f"wall {names[j - n]!r}" if j < n + nw
+                 else f"mesh {names[int(sim.tris.wall[j - n - nw])]!r} (triangle {j - n - nw})")
+        raise SceneError(f"sphere {int(p.i[k])} overlaps {other} by {p.ovl[k]:.4g} at the start, more than "
+                         f"{MAX_OVERLAP_RATIO:.0%} of the smaller radius ({rmin[k]:.4g}); move them apart")

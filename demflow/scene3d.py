@@ -60,8 +60,9 @@ class PlanePhase:
 @dataclass(frozen=True)
 class PlateServo:
     """Servo control of a plane (thesis eqs 5.11-5.12 in 3D): the plane presses on the spheres with
-    target force ``force`` F_A [force] along -normal; each step err = (F_A - F_C)/F_A with F_C the
-    spheres' reaction, and the plane moves along -normal at min(v_max, |G·err|)·sign(err).
+    target force ``force`` F_A [force] (along its normal, which points to the spheres); each step
+    err = (F_A - F_C)/F_A with F_C the spheres' reaction, and the plane moves along its normal (towards
+    the spheres) at min(v_max, |G·err|)·sign(err).
     ``gain`` G [length/time], ``v_max`` [length/time], active from step ``start``."""
 
     force: float

@@ -50,7 +50,7 @@ def set_plane_velocities(step, planes, ld):
             elif v < -vm:
                 v = -vm
             for a in range(3):
-                planes.vel[p, a] = -v * planes.normal[p, a]
+                planes.vel[p, a] = v * planes.normal[p, a]  # towards the spheres while F_C < F_A
             continue
         for q in range(ld.phase_start.shape[1]):
             if ld.phase_start[p, q] <= step < ld.phase_end[p, q]:

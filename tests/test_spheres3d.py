@@ -301,3 +301,24 @@ def test_a_moving_mesh_pushes_like_a_moving_plane():
     np.testing.assert_allclose(b.spheres.vel, a.spheres.vel, rtol=0, atol=1e-10)
     np.testing.assert_allclose(b.planes.point[0, 2], a.planes.point[0, 2], rtol=0, atol=1e-15)
     np.testing.assert_allclose(b.tris.v[:, 2::3], a.planes.point[0, 2], rtol=0, atol=1e-15)  # vertices moved too
+
+
+def test_servo_plate_holds_its_target_force():
+    """A sphere between a floor and a servo plate above it (no gravity): the plate comes down and holds
+    F_A; the floor then carries F_A too (statics), and the overlap is Hertz's for F_A."""
+    F = 50.0
+    R = 0.01
+    sc = df.Scene3D(name="servo", spheres=df.Spheres(x=[0.0], y=[0.0], z=[R], radius=[R], material="glass"),
+                    materials={"glass": GLASS, "steel": df.Material(young=2e11, poisson=0.3)},
+                    laws={("glass", "steel"): df.HertzMindlinLaw(friction=0.3, restitution=0.3)},
+                    planes=[df.Plane("floor", (0, 0, 0), (0, 0, 1), "steel"),
+                            df.Plane("plate", (0, 0, 2 * R + 1e-4), (0, 0, -1), "steel",
+                                     servo=df.PlateServo(force=F, gain=0.05, v_max=0.05))],
+                    local_damping=0.3, outputs=df.Outputs3D(every=100))
+    sim = df.build(sc).run(30000)
+    fz = sim.planes.force[:, 2]
+    assert fz[1] == pytest.approx(F, rel=1e-3)    # the spheres push the plate up with F_A
+    assert -fz[0] == pytest.approx(F, rel=1e-3)   # and the floor down with F_A
+    E = effective_modulus(4.8e10, 0.2, 2e11, 0.3)
+    delta = (F / (4 / 3 * E * math.sqrt(R))) ** (2 / 3)
+    assert sim.pairs.ovl.max() == pytest.approx(delta, rel=1e-3)
