@@ -11,9 +11,9 @@ import numpy as np
 from .laws.hertz_mindlin import HertzMindlin
 from .laws.linear import Linear
 from .scene import SceneError
-from .scene3d import Scene3D, check_scene3d
+from .scene3d import Scene3D, Spheres, check_scene3d
 from .simulation3d import Simulation3D
-from .state3d import Box3, Damping3, Loading3, Planes3, Spheres3, Triangles3
+from .state3d import Bodies3, Box3, Damping3, Loading3, Planes3, Spheres3, Triangles3
 
 FAMILIES_3D = (Linear, HertzMindlin)
 
@@ -41,13 +41,64 @@ def _array(where: str, v, n: int, shape=None, dtype=np.float64) -> np.ndarray:
     return a
 
 
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (nb, 3, 3) of unit quaternions (nb, 4) (w, x, y, z): body frame -> world."""
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], 1)
+
+
+def _no_bodies() -> Bodies3:
+    z3 = np.zeros((0, 3))
+    return Bodies3(pos=z3, vel=z3.copy(), L=z3.copy(), angvel=z3.copy(), quat=np.zeros((0, 4)), mass=np.zeros(0),
+                   moments=z3.copy(), start=np.zeros(1, np.int64), offset=z3.copy())
+
+
+def _clumps(c, index, first: int):
+    """Bodies3 of the clumps and their members as particles (appended after ``first`` free spheres)."""
+    from .shapes.clump import ClumpTemplate
+
+    T = c.template
+    if not isinstance(T, ClumpTemplate):
+        raise SceneError(f"scene.clumps.template={T!r} is not a ClumpTemplate; build one with "
+                         "ClumpTemplate.ellipsoid_like(K) or ClumpTemplate.from_spheres(...)")
+    nb = len(c)
+    pos = np.stack([_array(f"scene.clumps.{a}", getattr(c, a), nb) for a in "xyz"], axis=1)
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (nb, 1)) if c.orientation is None else \
+        _array("scene.clumps.orientation", c.orientation, nb, (4,))
+    norm = np.linalg.norm(q, axis=1)
+    if np.any(np.abs(norm - 1.0) > 1e-9):
+        k = int(np.argmax(np.abs(norm - 1.0)))
+        raise SceneError(f"scene.clumps.orientation[{k}] has norm {norm[k]:.12g}; give unit quaternions (w, x, y, z)")
+    vel = np.zeros((nb, 3)) if c.velocity is None else _array("scene.clumps.velocity", c.velocity, nb, (3,))
+    w = (np.zeros((nb, 3)) if c.angular_velocity is None
+         else _array("scene.clumps.angular_velocity", c.angular_velocity, nb, (3,)))
+    if c.material not in index:
+        raise SceneError(f"scene.clumps.material={c.material!r} is not declared; add it to scene.materials")
+    K = len(T.radii)
+    R = quat_to_matrix(q)
+    off = np.asarray(T.centres, np.float64)
+    mpos = (pos[:, None, :] + np.einsum("bij,kj->bki", R, off)).reshape(-1, 3)
+    mom = np.tile(np.asarray(T.moments, np.float64), (nb, 1))
+    # world angular momentum L = R I R^T ω
+    L = np.einsum("bij,bj->bi", R, mom * np.einsum("bji,bj->bi", R, w))
+    bvel = (vel[:, None, :] + np.cross(w[:, None, :], mpos.reshape(nb, K, 3) - pos[:, None, :])).reshape(-1, 3)
+    members = {"pos": mpos, "r": np.tile(T.radii, nb), "mass": np.full(nb * K, float(T.mass)), "vel": bvel,
+               "angvel": np.repeat(w, K, axis=0), "body": np.repeat(np.arange(nb, dtype=np.int64), K)}
+    bodies = Bodies3(pos=pos, vel=vel, L=L, angvel=w.copy(), quat=q / norm[:, None], mass=np.full(nb, float(T.mass)),
+                     moments=mom, start=first + K * np.arange(nb + 1, dtype=np.int64), offset=np.tile(off, (nb, 1)))
+    return bodies, members
+
+
 def build3d(scene: Scene3D) -> Simulation3D:
     """Check ``scene`` and return a :class:`Simulation3D` ready to run."""
     check_scene3d(scene)
-    s = scene.spheres
+    s = scene.spheres if scene.spheres is not None else Spheres(x=[], y=[], z=[], radius=[], material=[])
     n = len(s)
-    if n == 0:
-        raise SceneError("scene.spheres is empty; give at least one sphere")
+    if n == 0 and (scene.clumps is None or len(scene.clumps) == 0):
+        raise SceneError("scene.spheres is empty and there are no clumps; give at least one sphere or clump")
     x = _array("scene.spheres.x", s.x, n)
     y = _array("scene.spheres.y", s.y, n)
     z = _array("scene.spheres.z", s.z, n)
@@ -79,6 +130,20 @@ def build3d(scene: Scene3D) -> Simulation3D:
               else _array("scene.spheres.angular_velocity", s.angular_velocity, n, (3,)))
     fixed = np.zeros(n, np.int8) if s.fixed is None else _array("scene.spheres.fixed", s.fixed, n,
                                                                     dtype=bool).astype(np.int8)
+    body = np.full(n, -1, np.int64)
+    bodies = _no_bodies()
+    if scene.clumps is not None and len(scene.clumps):
+        bodies, members = _clumps(scene.clumps, index, n)
+        x, y, z = (np.concatenate([x, members["pos"][:, a]]) for a in range(3))
+        r = np.concatenate([r, members["r"]])
+        mats = mats + [scene.clumps.material] * len(members["r"])
+        mat = np.concatenate([mat, np.full(len(members["r"]), index[scene.clumps.material], np.int64)])
+        mass = np.concatenate([mass, members["mass"]])
+        vel = np.concatenate([vel, members["vel"]])
+        angvel = np.concatenate([angvel, members["angvel"]])
+        fixed = np.concatenate([fixed, np.full(len(members["r"]), 2, np.int8)])
+        body = np.concatenate([body, members["body"]])
+        n = len(r)
     quat = np.zeros((n, 4))
     quat[:, 0] = 1.0
 
@@ -168,7 +233,10 @@ def build3d(scene: Scene3D) -> Simulation3D:
             k = int(np.argmax(~np.isfinite(E)))
             raise SceneError(f"sphere {k} has material {mats[k]!r} with young={E[k]}: only a plane can be rigid; "
                              "give the spheres' material a finite Young's modulus")
-        dt_crit = rayleigh_time_step(r, mass, E, nu)
+        # members carry their clump's mass (for the dashpots): their density is the material's
+        dens = np.array([scene.materials[m].density for m in mats], np.float64)
+        m_rho = np.where((fixed == 2) & (dens > 0), dens * 4.0 / 3.0 * math.pi * r ** 3, mass)
+        dt_crit = rayleigh_time_step(r, m_rho, E, nu)
         how = "the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766)"
     else:
         kmax = max(max(law.kn, law.ks) for law in pairs.values())
@@ -187,11 +255,11 @@ def build3d(scene: Scene3D) -> Simulation3D:
     P[:, 9] = r
     P[:, 10] = mass
     P[:, 11] = mat
-    P[:, 12] = fixed
+    P[:, 12] = fixed == 1  # immovable (a clump member moves: its mass column is the clump's)
     sp = Spheres3(pos=np.stack([x, y, z], axis=1), vel=vel, angvel=angvel, quat=quat, r=r, mass=mass,
-                  inertia=inertia, inv_r2=1.0 / r ** 2, mat=mat, fixed=fixed, FM=np.zeros((n, 6)), P=P,
+                  inertia=inertia, inv_r2=1.0 / r ** 2, mat=mat, fixed=fixed, body=body, FM=np.zeros((n, 6)), P=P,
                   ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
-    sim = Simulation3D(scene=scene, spheres=sp, planes=planes, tris=tris, loading=loading, law=family, law_params=params,
+    sim = Simulation3D(scene=scene, spheres=sp, bodies=bodies, planes=planes, tris=tris, loading=loading, law=family, law_params=params,
                         box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, width=width,
                         damping=Damping3(alpha=float(d.alpha), c_abs=float(d.C), c_rot_abs=float(d.C_rot),
                                          local=float(scene.local_damping), adaptive=bool(scene.adaptive_damping),

@@ -49,6 +49,31 @@ class Spheres:
         return len(np.atleast_1d(self.x))
 
 
+@dataclass
+class Clumps:
+    """Rigid clumps of spheres (bodies made of overlapping member spheres; no contacts inside one).
+
+    template : a :class:`demflow.shapes.clump.ClumpTemplate` (members in its principal frame, mass,
+               principal moments), the same for every clump
+    x, y, z : centres of mass [length]
+    orientation : optional (nb, 4) unit quaternions (w, x, y, z), body frame to world (default: identity)
+    velocity, angular_velocity : optional (nb, 3) at the half step
+    material : the members' material (contact law); the mass and inertia are the template's
+    """
+
+    template: object
+    x: Sequence[float]
+    y: Sequence[float]
+    z: Sequence[float]
+    material: str
+    orientation: Sequence[Sequence[float]] | None = None
+    velocity: Sequence[Sequence[float]] | None = None
+    angular_velocity: Sequence[Sequence[float]] | None = None
+
+    def __len__(self) -> int:
+        return len(np.atleast_1d(self.x))
+
+
 @dataclass(frozen=True)
 class PlanePhase:
     """One phase of a plane's prescribed translation: ``velocity`` (vx, vy, vz) for ``cycles`` steps."""
@@ -138,7 +163,7 @@ class Scene3D:
     """
 
     name: str
-    spheres: Spheres
+    spheres: Spheres | None
     materials: dict[str, Material]
     laws: dict
     planes: list[Plane] = field(default_factory=list)
@@ -156,6 +181,7 @@ class Scene3D:
     outputs: Outputs3D = Outputs3D()
     box: Box = Box()
     description: str = ""
+    clumps: Clumps | None = None
 
     def law_for(self, a: str, b: str):
         """The law of a material pair, in either order; a clear error if none is declared."""

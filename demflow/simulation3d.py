@@ -21,6 +21,7 @@ from .state3d import Pairs3, Records3
 from .stepping3d import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps3
 
 _STATE = ("pos", "vel", "angvel", "quat", "img")
+_BODY_STATE = ("pos", "vel", "L", "angvel", "quat")
 _RECORDED = ("step", "plane_force", "plane_pos", "energy", "unbalanced", "contacts", "peak", "track")
 
 
@@ -33,10 +34,11 @@ class Simulation3D:
 
     CHUNK = 20000  # steps between last-good-state copies
 
-    def __init__(self, *, scene, spheres, planes, tris, loading, law, law_params, box, dt, dt_crit, skin,
+    def __init__(self, *, scene, spheres, bodies, planes, tris, loading, law, law_params, box, dt, dt_crit, skin,
                  gravity, damping, width):
         self.scene = scene
         self.spheres = spheres
+        self.bodies = bodies
         self.planes = planes
         self.tris = tris
         self.loading = loading
@@ -78,14 +80,20 @@ class Simulation3D:
     def rebuild(self):
         """Wrap periodic axes, list neighbours afresh and carry the history over by pair key."""
         sp = self.spheres
+        b = self.bodies
         for a, (on, lo, length) in enumerate(((self.box.periodic_x, self.box.x0, self.box.lx),
                                               (self.box.periodic_y, self.box.y0, self.box.ly))):
             if on:
                 k = np.floor((sp.pos[:, a] - lo) / length).astype(np.int64)
+                # a clump is wrapped by its centre of mass, its members with it
+                kb = np.floor((b.pos[:, a] - lo) / length).astype(np.int64)
+                member = sp.body >= 0
+                k[member] = kb[sp.body[member]]
+                b.pos[:, a] -= kb * length
                 sp.pos[:, a] -= k * length
                 sp.img[:, a] += k
         i, j, shift = sphere_pairs(sp.pos, sp.r, self.skin, self.box, self.planes.point, self.planes.normal,
-                                   self.planes.is_mesh, self.tris.v)
+                                   self.planes.is_mesh, self.tris.v, sp.body)
         old = self.pairs
         hist = carry_history(old.i, old.j, old.hist, i, j, self.n + self.n_planes + self.tris.v.shape[0])
         m = i.size
@@ -137,7 +145,7 @@ class Simulation3D:
                 while self.step < stop:
                     t0 = time.perf_counter()
                     done, status, rec_count = run_steps3(
-                        stop - self.step, self.step, self.skin, self.spheres, self.pairs, self.planes,
+                        stop - self.step, self.step, self.skin, self.spheres, self.bodies, self.pairs, self.planes,
                         self.tris, self.loading, self.law_params, self.g, self.damping, self.dt, rec, rec_count, self.work)
                     self.dem_s += time.perf_counter() - t0
                     self.step += done
@@ -226,6 +234,7 @@ class Simulation3D:
     # ------------------------------------------------------------------ state I/O
     def _state_arrays(self) -> dict:
         out = {k: getattr(self.spheres, k) for k in _STATE}
+        out.update({f"body_{k}": getattr(self.bodies, k) for k in _BODY_STATE})
         out.update(alpha_now=self.damping.alpha_now, prev_r=self.damping.prev_r, prev_dx=self.damping.prev_dx,
                    plane_point=self.planes.point, tri_v=self.tris.v, plane_vel=self.planes.vel, plane_force=self.planes.force,
                    pair_i=self.pairs.i, pair_j=self.pairs.j, hist=self.pairs.hist, work=self.work)
@@ -234,6 +243,8 @@ class Simulation3D:
     def _set_state(self, s: dict) -> None:
         for k in _STATE:
             getattr(self.spheres, k)[:] = s[k]
+        for k in _BODY_STATE:
+            getattr(self.bodies, k)[:] = s[f"body_{k}"]
         for k in ("alpha_now", "prev_r", "prev_dx"):
             getattr(self.damping, k)[:] = s[k]
         self.planes.point[:] = s["plane_point"]

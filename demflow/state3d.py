@@ -20,11 +20,25 @@ Spheres3 = namedtuple("Spheres3", [
     "inertia",  # 2/5 mR² [mass·length²]
     "inv_r2",   # 1/R² (the step-length test)
     "mat",      # material index (int64)
-    "fixed",    # int8: 1 = not integrated (moves with its velocity)
+    "fixed",    # int8: 1 = not integrated (moves with its velocity); 2 = a clump member (moved by its body)
+    "body",     # (n,) int64: the clump a member belongs to, -1 for a sphere that is its own body
     "FM",       # (n, 6) contact force (0-2) [force] and moment (3-5) [force·length] sums of the last step
     "P",        # (n, 16) packed rows the pair pass reads: pos, vel, angvel, r, mass, mat, fixed, 0...
     "ref",      # (n, 3) position at the last neighbour-list build [length]
     "img",      # (n, 2) int64 periodic image counters along x and y (unwrapped = pos + img·L)
+])
+
+Bodies3 = namedtuple("Bodies3", [
+    # rigid clumps (bodies made of member spheres; a free sphere is its own body and is not listed here)
+    "pos",      # (nb, 3) centre of mass [length]
+    "vel",      # (nb, 3) velocity at the half step [length/time]
+    "L",        # (nb, 3) angular momentum (world frame) at the half step [mass·length²/time]
+    "angvel",   # (nb, 3) angular velocity (world frame) at the half step [1/time]
+    "quat",     # (nb, 4) orientation (w, x, y, z): body frame -> world
+    "mass",     # (nb,) [mass]
+    "moments",  # (nb, 3) principal moments of inertia [mass·length²]
+    "start",    # (nb + 1,) int64: members of body b are particles start[b] .. start[b+1]-1
+    "offset",   # (n_members, 3) member centres in the body frame [length] (member k of the list)
 ])
 
 Pairs3 = namedtuple("Pairs3", [

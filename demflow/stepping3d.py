@@ -100,6 +100,8 @@ def integrate(sp, g, dmp, dt, recording, orient):
     for i in range(n):
         m = sp.mass[i]
         I = sp.inertia[i]
+        if sp.fixed[i] == 2:  # a clump member: its body moves it (body_step)
+            continue
         if recording:
             epot -= m * (g[0] * sp.pos[i, 0] + g[1] * sp.pos[i, 1] + g[2] * sp.pos[i, 2])
         if sp.fixed[i]:
@@ -179,7 +181,185 @@ def integrate(sp, g, dmp, dt, recording, orient):
 
 
 @njit
-def run_steps3(n_steps, step0, skin, sp, pairs, planes, tris, ld, law, g, dmp, dt, rec, rec_count, work):
+def _qmul(aw, ax, ay, az, bw, bx, by, bz):
+    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
+
+
+@njit
+def _rot(qw, qx, qy, qz, vx, vy, vz, inverse):
+    """R(q) v (body -> world), or R(q)^T v with ``inverse``."""
+    if inverse:
+        qx, qy, qz = -qx, -qy, -qz
+    # v' = v + 2 w (u × v) + 2 u × (u × v), u = (qx, qy, qz)
+    cx = qy * vz - qz * vy
+    cy = qz * vx - qx * vz
+    cz = qx * vy - qy * vx
+    return (vx + 2.0 * (qw * cx + qy * cz - qz * cy), vy + 2.0 * (qw * cy + qz * cx - qx * cz),
+            vz + 2.0 * (qw * cz + qx * cy - qy * cx))
+
+
+@njit
+def body_step(sp, bd, g, dmp, dt, recording):
+    """Advance the rigid clumps by one step and place their members.
+
+    Force and moment on a body: the sums over its members of F_p and of M_p + (x_p - x_b) × F_p (in
+    member order).  Translation exactly as a sphere's.  Rotation: an isotropic body (equal principal
+    moments) turns exactly as a sphere; an aspherical one by the leapfrog of the angular momentum
+    L_{n+1/2} = L_{n-1/2} + Δt T with the orientation advanced at the half step (YADE's
+    ``exactAsphericalRot``, Omelyan 1998): ω_n = I⁻¹ R_nᵀ(L_{n-1/2} + Δt T/2), q_{n+1/2} from ω_n,
+    ω_{n+1/2} = I⁻¹ R_{n+1/2}ᵀ L_{n+1/2}, q_{n+1} = q_n + Δt q̇(q_{n+1/2}, ω_{n+1/2}).  Mass-proportional
+    damping acts on L as dL/dt = T - αL (its work is not in the damping record for aspherical bodies).
+    Returns (kinetic translation, kinetic rotation, potential,
+    largest squared member step / radius², damping work)."""
+    ekt = 0.0
+    ekr = 0.0
+    epot = 0.0
+    jump2 = 0.0
+    wdamp = 0.0
+    inv_dt = 1.0 / dt
+    alpha = dmp.alpha + (dmp.alpha_now[0] if dmp.adaptive else 0.0)
+    local = dmp.local
+    for b in range(bd.pos.shape[0]):
+        m = bd.mass[b]
+        s0 = bd.start[b]
+        s1 = bd.start[b + 1]
+        F = np.zeros(3)
+        T = np.zeros(3)
+        for p in range(s0, s1):
+            rx = sp.pos[p, 0] - bd.pos[b, 0]
+            ry = sp.pos[p, 1] - bd.pos[b, 1]
+            rz = sp.pos[p, 2] - bd.pos[b, 2]
+            fx = sp.FM[p, 0]
+            fy = sp.FM[p, 1]
+            fz = sp.FM[p, 2]
+            F[0] += fx
+            F[1] += fy
+            F[2] += fz
+            T[0] += sp.FM[p, 3] + (ry * fz - rz * fy)
+            T[1] += sp.FM[p, 4] + (rz * fx - rx * fz)
+            T[2] += sp.FM[p, 5] + (rx * fy - ry * fx)
+        if recording:
+            epot -= m * (g[0] * bd.pos[b, 0] + g[1] * bd.pos[b, 1] + g[2] * bd.pos[b, 2])
+        C = alpha * m + dmp.c_abs
+        a_t = m * inv_dt - 0.5 * C
+        b_t = 1.0 / (m * inv_dt + 0.5 * C)
+        for a in range(3):
+            f = F[a] + m * g[a]
+            v0 = bd.vel[b, a]
+            if local > 0.0:
+                s = f * (v0 + 0.5 * dt * f / m)
+                if s > 0.0:
+                    f *= 1.0 - local
+                elif s < 0.0:
+                    f *= 1.0 + local
+            v1 = (a_t * v0 + f) * b_t
+            bd.vel[b, a] = v1
+            bd.pos[b, a] += dt * v1
+            if recording:
+                vm = 0.5 * (v0 + v1)
+                ekt += 0.5 * m * vm * vm
+                wdamp += (f - F[a] - m * g[a]) * vm * dt - C * vm * vm * dt
+        I0 = bd.moments[b, 0]
+        I1 = bd.moments[b, 1]
+        I2 = bd.moments[b, 2]
+        qw, qx, qy, qz = bd.quat[b, 0], bd.quat[b, 1], bd.quat[b, 2], bd.quat[b, 3]
+        if I0 == I1 and I1 == I2:  # isotropic: as a sphere
+            Cr = alpha * I0 + dmp.c_rot_abs
+            a_r = I0 * inv_dt - 0.5 * Cr
+            b_r = 1.0 / (I0 * inv_dt + 0.5 * Cr)
+            for a in range(3):
+                t = T[a]
+                w0 = bd.angvel[b, a]
+                if local > 0.0:
+                    s = t * (w0 + 0.5 * dt * t / I0)
+                    if s > 0.0:
+                        t *= 1.0 - local
+                    elif s < 0.0:
+                        t *= 1.0 + local
+                w1 = (a_r * w0 + t) * b_r
+                bd.angvel[b, a] = w1
+                bd.L[b, a] = I0 * w1
+                if recording:
+                    wm = 0.5 * (w0 + w1)
+                    ekr += 0.5 * I0 * wm * wm
+                    wdamp += (t - T[a]) * wm * dt - Cr * wm * wm * dt
+            wx = bd.angvel[b, 0]
+            wy = bd.angvel[b, 1]
+            wz = bd.angvel[b, 2]
+            wn = math.sqrt(wx * wx + wy * wy + wz * wz)
+            if wn > 0.0:
+                h = 0.5 * wn * dt
+                sn = math.sin(h) / wn
+                nw, nx, ny, nz = _qmul(math.cos(h), sn * wx, sn * wy, sn * wz, qw, qx, qy, qz)
+                qi = 1.0 / math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
+                qw, qx, qy, qz = nw * qi, nx * qi, ny * qi, nz * qi
+        else:
+            for a in range(3):
+                if local > 0.0:
+                    s = T[a] * bd.angvel[b, a]
+                    if s > 0.0:
+                        T[a] *= 1.0 - local
+                    elif s < 0.0:
+                        T[a] *= 1.0 + local
+            # ω_n (body frame) from L_n = L_{n-1/2} + Δt T / 2
+            Lx = bd.L[b, 0] + 0.5 * dt * T[0]
+            Ly = bd.L[b, 1] + 0.5 * dt * T[1]
+            Lz = bd.L[b, 2] + 0.5 * dt * T[2]
+            lx, ly, lz = _rot(qw, qx, qy, qz, Lx, Ly, Lz, True)
+            wbx, wby, wbz = lx / I0, ly / I1, lz / I2
+            if recording:
+                ekr += 0.5 * (wbx * lx + wby * ly + wbz * lz)
+            # L_{n+1/2}, with mass-proportional damping dL/dt = T - αL
+            for a in range(3):
+                L0 = bd.L[b, a]
+                bd.L[b, a] = ((inv_dt - 0.5 * alpha) * L0 + T[a]) / (inv_dt + 0.5 * alpha)
+            # q_{n+1/2} = q_n + Δt/2 · ½ q_n ⊗ (0, ω_n)
+            dw, dx, dy, dz = _qmul(qw, qx, qy, qz, 0.0, wbx, wby, wbz)
+            hw, hx, hy, hz = qw + 0.25 * dt * dw, qx + 0.25 * dt * dx, qy + 0.25 * dt * dy, qz + 0.25 * dt * dz
+            qi = 1.0 / math.sqrt(hw * hw + hx * hx + hy * hy + hz * hz)
+            hw, hx, hy, hz = hw * qi, hx * qi, hy * qi, hz * qi
+            lx, ly, lz = _rot(hw, hx, hy, hz, bd.L[b, 0], bd.L[b, 1], bd.L[b, 2], True)
+            wbx, wby, wbz = lx / I0, ly / I1, lz / I2
+            dw, dx, dy, dz = _qmul(hw, hx, hy, hz, 0.0, wbx, wby, wbz)
+            nw, nx, ny, nz = qw + 0.5 * dt * dw, qx + 0.5 * dt * dx, qy + 0.5 * dt * dy, qz + 0.5 * dt * dz
+            qi = 1.0 / math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
+            qw, qx, qy, qz = nw * qi, nx * qi, ny * qi, nz * qi
+            ax_, ay_, az_ = _rot(hw, hx, hy, hz, wbx, wby, wbz, False)
+            bd.angvel[b, 0] = ax_
+            bd.angvel[b, 1] = ay_
+            bd.angvel[b, 2] = az_
+        bd.quat[b, 0] = qw
+        bd.quat[b, 1] = qx
+        bd.quat[b, 2] = qy
+        bd.quat[b, 3] = qz
+        # place the members: x_p = x_b + R d_p, v_p = v_b + ω × (x_p - x_b), ω_p = ω
+        wx = bd.angvel[b, 0]
+        wy = bd.angvel[b, 1]
+        wz = bd.angvel[b, 2]
+        for p in range(s0, s1):
+            k = p - bd.start[0]
+            dx, dy, dz = _rot(qw, qx, qy, qz, bd.offset[k, 0], bd.offset[k, 1], bd.offset[k, 2], False)
+            nx = bd.pos[b, 0] + dx
+            ny = bd.pos[b, 1] + dy
+            nz = bd.pos[b, 2] + dz
+            st = ((nx - sp.pos[p, 0]) ** 2 + (ny - sp.pos[p, 1]) ** 2 + (nz - sp.pos[p, 2]) ** 2) * sp.inv_r2[p]
+            if not st <= jump2:
+                jump2 = st if st == st else np.inf
+            sp.pos[p, 0] = nx
+            sp.pos[p, 1] = ny
+            sp.pos[p, 2] = nz
+            sp.vel[p, 0] = bd.vel[b, 0] + (wy * dz - wz * dy)
+            sp.vel[p, 1] = bd.vel[b, 1] + (wz * dx - wx * dz)
+            sp.vel[p, 2] = bd.vel[b, 2] + (wx * dy - wy * dx)
+            sp.angvel[p, 0] = wx
+            sp.angvel[p, 1] = wy
+            sp.angvel[p, 2] = wz
+    return ekt, ekr, epot, jump2, wdamp
+
+
+@njit
+def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g, dmp, dt, rec, rec_count, work):
     """Run up to ``n_steps`` steps from step ``step0``; stop early for a rebuild or a blow-up.
 
     ``work`` (2,) accumulates the work done on the spheres by the planes and by damping (energy
@@ -217,6 +397,14 @@ def run_steps3(n_steps, step0, skin, sp, pairs, planes, tris, ld, law, g, dmp, d
                     nc += 1
             rec.unbalanced[rec_count] = (rsum / nfree) / (fsum / nc) if nfree > 0 and nc > 0 and fsum > 0 else np.inf
         ekt, ekr, epot, jump, wdamp = integrate(sp, g, dmp, dt, recording, rec.orient)
+        if bodies.pos.shape[0]:
+            bkt, bkr, bpot, bjump2, bdamp = body_step(sp, bodies, g, dmp, dt, recording)
+            ekt += bkt
+            ekr += bkr
+            epot += bpot
+            wdamp += bdamp
+            if not bjump2 <= jump * jump:
+                jump = math.sqrt(bjump2) if bjump2 == bjump2 else np.inf
         work[1] += wdamp
         if jump > MAX_STEP_RATIO or not math.isfinite(jump):
             return s + 1, BLOWUP, rec_count

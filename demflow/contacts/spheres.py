@@ -44,7 +44,7 @@ def _cell_of(p, lo, side, nc, periodic):
 
 
 @njit
-def _sphere_candidates(pos, r, skin, lo, side, nc, periodic, period, count_only, out_i, out_j, out_s):
+def _sphere_candidates(pos, r, body, skin, lo, side, nc, periodic, period, count_only, out_i, out_j, out_s):
     n = pos.shape[0]
     ncell = nc[0] * nc[1] * nc[2]
     cid = np.empty(n, np.int64)
@@ -94,7 +94,7 @@ def _sphere_candidates(pos, r, skin, lo, side, nc, periodic, period, count_only,
                     ns += 1
                     for t in range(start[q], start[q + 1]):
                         j = order[t]
-                        if j <= i:
+                        if j <= i or (body[i] >= 0 and body[i] == body[j]):  # no contacts inside a clump
                             continue
                         sx = 0.0
                         sy = 0.0
@@ -195,7 +195,8 @@ def _triangle_candidates(pos, r, skin, tv, count_only, out_i, out_t):
 
 
 def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point: np.ndarray,
-                 planes_normal: np.ndarray, is_mesh: np.ndarray | None = None, tri_v: np.ndarray | None = None):
+                 planes_normal: np.ndarray, is_mesh: np.ndarray | None = None, tri_v: np.ndarray | None = None,
+                 body: np.ndarray | None = None):
     """The neighbour list (i, j, shift) in key order: sphere pairs within ``skin`` by cells, then
     sphere-plane pairs (j = n + wall) within r + skin, then sphere-triangle pairs
     (j = n + n_walls + triangle) whose closest point is within r + skin."""
@@ -226,11 +227,13 @@ def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point:
             break
     e_i = np.empty(0, np.int64)
     e_s = np.empty((0, 3))
-    m = _sphere_candidates(pos, r, skin, lo, side, nc, periodic, period, True, e_i, e_i, e_s)
+    if body is None:
+        body = np.full(n, -1, np.int64)
+    m = _sphere_candidates(pos, r, body, skin, lo, side, nc, periodic, period, True, e_i, e_i, e_s)
     pi = np.empty(m, np.int64)
     pj = np.empty(m, np.int64)
     ps = np.empty((m, 3))
-    _sphere_candidates(pos, r, skin, lo, side, nc, periodic, period, False, pi, pj, ps)
+    _sphere_candidates(pos, r, body, skin, lo, side, nc, periodic, period, False, pi, pj, ps)
     order = np.lexsort((pj, pi))
     pi, pj, ps = pi[order], pj[order], ps[order]
     wi, wj = [], []
@@ -265,13 +268,15 @@ def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point:
     return pi, pj, ps
 
 
-def sphere_pairs_brute_force(pos, r, skin, box, planes_point, planes_normal):
+def sphere_pairs_brute_force(pos, r, skin, box, planes_point, planes_normal, body=None):
     """O(N²) reference for :func:`sphere_pairs` (tests): every pair by minimum image."""
     n = pos.shape[0]
     nplanes = planes_point.shape[0]
     out = []
     for i in range(n):
         for j in range(i + 1, n):
+            if body is not None and body[i] >= 0 and body[i] == body[j]:
+                continue
             d = pos[j] - pos[i]
             s = np.zeros(3)
             if box.periodic_x:
