@@ -389,6 +389,16 @@ def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g
                     nfree += 1
                     rsum += math.sqrt((sp.FM[i, 0] + sp.mass[i] * g[0]) ** 2 + (sp.FM[i, 1] + sp.mass[i] * g[1]) ** 2
                                       + (sp.FM[i, 2] + sp.mass[i] * g[2]) ** 2)
+            for b in range(bodies.pos.shape[0]):  # a clump: the resultant over its members
+                fx = bodies.mass[b] * g[0]
+                fy = bodies.mass[b] * g[1]
+                fz = bodies.mass[b] * g[2]
+                for p in range(bodies.start[b], bodies.start[b + 1]):
+                    fx += sp.FM[p, 0]
+                    fy += sp.FM[p, 1]
+                    fz += sp.FM[p, 2]
+                nfree += 1
+                rsum += math.sqrt(fx * fx + fy * fy + fz * fz)
             fsum = 0.0
             nc = 0
             for k in range(pairs.fn.shape[0]):

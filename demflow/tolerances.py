@@ -173,6 +173,10 @@ TOLERANCES = {
         2e-2,
         "Acceptance of issue 13: the chain's arrival time within 2 % of the √(k/m) wave-speed prediction.",
         kind="exact"),
+    "miyata3d.self-weight": Tolerance(
+        5e-3,
+        "Acceptance of issue 14: after settling, the floor stress equals the bed's weight over the area within "
+        "0.5 % (statics of a bed at rest; the kinetic energy is below 1e-9 × weight × 1 m).", kind="exact"),
 }
 
 

@@ -20,6 +20,7 @@ from .thesis_simple_shear_study import SimpleShearStudy
 from .hertz_impacts import HertzImpacts
 from .ch3_stack import DampedStack, ElasticStack
 from .ch3_chain import ImpulseChain
+from .miyata_uniaxial3d import MiyataUniaxial3D
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
@@ -32,6 +33,7 @@ CASES[HertzImpacts.name] = HertzImpacts()
 CASES[ElasticStack.name] = ElasticStack()
 CASES[DampedStack.name] = DampedStack()
 CASES[ImpulseChain.name] = ImpulseChain()
+CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
 
 
 def get_case(name: str) -> Case:

@@ -1,0 +1,256 @@
+"""miyata-uniaxial-3d: uniaxial compression of ellipsoid-like clumps (Miyata §3.3), reduced variant.
+
+The seed's protocol: particles inserted in a box periodic in x and y, settled under gravity, those
+with centres above 2.0 m removed, settled again, a plate placed at the top and lowered at 2 cm/s;
+Hertz E = 70 GPa, ν = 0.2 (particles and plate), μ = 0.6; particles 191 kg with semi-axes 37.1,
+26.0 and 18.2 cm.  The seed used 1500 ellipsoids in a 10 × 10 m box (1469 after trimming, floor
+self-weight 1469 × 191 × 9.81 / 100 = 27.5 kPa); the reduced variant here keeps the bed depth,
+the particle, the stresses and the plate speed and shrinks the box.
+
+Assumptions (stated on the report): particles are K-sphere clumps of the ellipsoid (the greedy
+cover of :mod:`demflow.shapes.clump`, scaled to 191 kg; K = 8 by default: 69 % of the ellipsoid's
+volume, the rest of the mass spread over it); inserted on a loose lattice with random orientations
+(seeded); Cundall local damping 0.3 throughout (the seed does not say which damping its run used;
+YADE's recipe of ENGINES.md); dashpots from e = 0.3 (LIGGGHTS-like body-mass dashpots); the
+settled state is "at rest" when the kinetic energy is below 1e-9 × the bed's weight × 1 m.
+Contacts on the plate and the floor are counted per particle (a clump touching with several
+members counts once) and a particle's force is the sum over its members.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..scene import Box, Material
+from ..scene3d import Clumps, Outputs3D, Plane, PlanePhase, Scene3D
+from ..shapes.clump import MIYATA_AXES, MIYATA_MASS, ClumpTemplate
+from ..laws.hertz_mindlin import HertzMindlinLaw
+from .base import Case, CaseRun, Check
+
+SRC = "Miyata §3.3"
+G = 9.81
+SEED_FLOOR_STRESS = 1469 * 191.0 * G / 100.0  # the seed's self-weight floor stress [Pa]
+
+
+def _materials():
+    return {"rock": Material(density=2650.0, young=7e10, poisson=0.2),
+            "steel": Material(density=7800.0, young=7e10, poisson=0.2)}
+
+
+def _laws():
+    law = HertzMindlinLaw(friction=0.6, restitution=0.3)
+    return {("rock", "rock"): law, ("rock", "steel"): law}
+
+
+def insertion_scene(p) -> Scene3D:
+    """Clumps on a loose lattice (spacing 0.78 m, above one another) with random orientations."""
+    rng = np.random.default_rng(p["seed"])
+    L = p["box"]
+    nx = max(1, int(L // 0.78))
+    pos = []
+    z = 0.45
+    while len(pos) < p["n_insert"]:
+        for i in range(nx):
+            for j in range(nx):
+                if len(pos) < p["n_insert"]:
+                    pos.append(((i + 0.5) * L / nx, (j + 0.5) * L / nx, z))
+        z += 0.78
+    pos = np.array(pos)
+    q = rng.normal(size=(len(pos), 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    T = ClumpTemplate.ellipsoid_like(int(p["K"]), MIYATA_AXES, MIYATA_MASS)
+    return Scene3D(name="miyata-uniaxial-3d-settle", spheres=None, materials=_materials(), laws=_laws(),
+                   clumps=Clumps(T, x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], material="rock", orientation=q),
+                   planes=[Plane("floor", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "steel")], gravity=(0.0, 0.0, -G),
+                   local_damping=p["local_damping"], box=Box(periodic_x=(0.0, L), periodic_y=(0.0, L)),
+                   dt_fraction=p["dt_fraction"], outputs=Outputs3D(every=1000))
+
+
+def settle(sim, p, max_steps: int) -> int:
+    """Run until the kinetic energy is below 1e-9 × weight × 1 m (checked every 5000 steps)."""
+    W = float(sim.bodies.mass.sum()) * G
+    done = 0
+    while done < max_steps:
+        sim.run(5000)
+        done += 5000
+        r = sim.tables(include_records=True)["records"].iloc[-1]
+        if r.kinetic_translation + r.kinetic_rotation < 1e-9 * W * 1.0:
+            return done
+    return -done
+
+
+def next_stage(sim, p, name: str, keep=None, plate_z: float | None = None) -> Scene3D:
+    """A scene continuing from ``sim``'s clumps (those in ``keep``), at rest, optionally with a plate
+    at height ``plate_z`` moving down at the plate speed."""
+    b = sim.bodies
+    keep = np.arange(len(b.mass)) if keep is None else keep
+    pos = b.pos[keep].copy()
+    pos[:, 0] += 0.0
+    sc = insertion_scene(p)
+    T = sc.clumps.template
+    planes = list(sc.planes)
+    if plate_z is not None:
+        planes.append(Plane("plate", (0.0, 0.0, plate_z), (0.0, 0.0, -1.0), "steel",
+                            phases=(PlanePhase(cycles=10 ** 9, velocity=(0.0, 0.0, -p["plate_speed"])),)))
+    return Scene3D(name=name, spheres=None, materials=_materials(), laws=_laws(),
+                   clumps=Clumps(T, x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], material="rock", orientation=b.quat[keep]),
+                   planes=planes, gravity=(0.0, 0.0, -G), local_damping=p["local_damping"],
+                   box=Box(periodic_x=(0.0, p["box"]), periodic_y=(0.0, p["box"])), dt_fraction=p["dt_fraction"],
+                   outputs=Outputs3D(every=p["record_every"]))
+
+
+def per_particle_forces(sim, wall: int) -> np.ndarray:
+    """Force each particle (clump) exerts on wall ``wall`` (index among the planes): the sum of its
+    members' normal forces there; particles not touching are left out."""
+    pr = sim.pairs
+    on = (pr.j == sim.n + wall) & (pr.fn > 0)
+    body = sim.spheres.body[pr.i[on]]
+    f = np.bincount(body, weights=pr.fn[on], minlength=len(sim.bodies.mass))
+    return f[f > 0]
+
+
+class MiyataUniaxial3D(Case):
+    name = "miyata-uniaxial-3d"
+    title = "Uniaxial compression of ellipsoid-like clumps (Miyata §3.3), reduced variant"
+    source = SRC
+    assumptions = (
+        "Reduced variant: the seed's particle (191 kg, 37.1 × 26.0 × 18.2 cm), bed depth (trim at 2.0 m), plate "
+        "speed (2 cm/s), material and stresses, in a 2 × 2 m periodic box (80 inserted) instead of 10 × 10 m (1500).",
+        "Particles are K = 8 sphere clumps of the ellipsoid (greedy inscribed cover, 69 % of its volume), mass "
+        "191 kg; inserted on a loose lattice with seeded random orientations.",
+        "Cundall local damping 0.3 and dashpots from e = 0.3 throughout (the seed does not state its damping).",
+        "Contacts and forces on the plate and floor are per particle (members summed).",
+    )
+    # work in progress (issue 14): 194 s here, and in the 2 × 2 m box only 1-5 particles touch the plate, whose
+    # stress rises and collapses as they slip (measured: 336 kPa at 119 mm, 0 at 131 mm, 481 kPa at 180 mm);
+    # left out of a plain `demflow validate` until the variant's size and protocol are settled
+    slow = True
+    params = dict(box=2.0, n_insert=80, K=8, seed=1, trim=2.0, plate_speed=0.02, stress_max=600e3, dt_fraction=0.2,
+                  local_damping=0.3, record_every=200, settle_max=400000, snapshots=10)
+
+    def run(self, p) -> CaseRun:
+        from ..build import build
+
+        A = p["box"] ** 2
+        s1 = build(insertion_scene(p))
+        steps1 = settle(s1, p, p["settle_max"])
+        keep = np.nonzero(s1.bodies.pos[:, 2] <= p["trim"])[0]
+        s2 = build(next_stage(s1, p, "miyata-uniaxial-3d-trimmed", keep))
+        steps2 = settle(s2, p, p["settle_max"])
+        weight = float(s2.bodies.mass.sum()) * G
+        floor_settled = -float(s2.planes.force[0, 2])
+        n_particles = len(s2.bodies.mass)
+        top = float((s2.spheres.pos[:, 2] + s2.spheres.r).max())
+        s3 = build(next_stage(s2, p, "miyata-uniaxial-3d-loading", plate_z=top + 0.005))
+        z0 = top + 0.005
+        rows = []
+        snaps = []
+        levels = list(np.linspace(400e3, p["stress_max"], p["snapshots"]))
+        touched = None
+        while True:
+            s3.run(p["record_every"])
+            plate = float(s3.planes.force[1, 2]) / A
+            floor = -float(s3.planes.force[0, 2]) / A
+            zp = float(s3.planes.point[1, 2])
+            if touched is None and plate > 0:
+                touched = zp
+            fp = per_particle_forces(s3, 1)
+            ff = per_particle_forces(s3, 0)
+            rows.append({"step": s3.step, "plate_z": zp, "settlement": (touched - zp) if touched is not None else 0.0,
+                         "plate_stress": plate, "floor_stress": floor, "plate_contacts": fp.size,
+                         "floor_contacts": ff.size})
+            while levels and plate >= levels[0]:
+                snaps.append({"stress": plate, "plate": fp, "floor": ff})
+                levels.pop(0)
+            if plate >= p["stress_max"] or zp < 0.5:
+                break
+        import pandas as pd
+
+        return CaseRun({}, {"curve": pd.DataFrame(rows), "snapshots": snaps, "weight": weight,
+                            "floor_settled": floor_settled, "n_particles": n_particles, "area": A,
+                            "settle_steps": (steps1, steps2), "dt": s3.dt, "plate_start": z0})
+
+    def checks(self, run, p):
+        ex = run.extras
+        A = ex["area"]
+        c = ex["curve"]
+        out = [Check.against(f"floor stress after settling vs total weight / area ({ex['n_particles']} particles) [Pa]",
+                             ex["floor_settled"] / A, ex["weight"] / A, "miyata3d.self-weight", SRC)]
+        on = c[c.settlement > 0]
+        grid = np.linspace(on.settlement.min(), on.settlement.max(), 21)
+        sig = np.interp(grid, on.settlement.to_numpy(), on.plate_stress.to_numpy())
+        out.append(Check.condition("plate stress rises with settlement (21 equally spaced settlements)",
+                                   bool(np.all(np.diff(sig) >= 0)), float(np.min(np.diff(sig))), SRC,
+                                   "The seed's stress-settlement curve rises through three regimes.",
+                                   kind="self-consistency"))
+        for level in (100e3, 400e3):
+            s_at = float(np.interp(level, on.plate_stress.to_numpy(), on.settlement.to_numpy()))
+            out.append(Check.info(f"settlement at {level / 1e3:.0f} kPa (regime boundary in the seed) [m]", s_at, SRC,
+                                  "The seed's regimes: 0-100, 100-400, > 400 kPa; located on this curve."))
+        out.append(Check.info("self-weight floor stress per metre of bed vs the seed's 27.5 kPa bed [Pa]",
+                              ex["floor_settled"] / A, SRC, "Reduced box: the same depth, so about the same stress "
+                              "(the seed: 1469 × 191 kg × g / 100 m²).", reference=SEED_FLOOR_STRESS))
+        if ex["snapshots"]:
+            from ..analysis.forces import fit_q_model
+
+            fp = np.concatenate([s["plate"] / s["plate"].mean() for s in ex["snapshots"]])
+            ff = np.concatenate([s["floor"] / s["floor"].mean() for s in ex["snapshots"]])
+            out.append(Check.info("q-model N of the plate forces (per particle, 10 snapshots at 400-600 kPa)",
+                                  fit_q_model(fp).N, SRC, "The seed: plate PDF close to the q-model with N = 3.",
+                                  reference=3.0))
+            out.append(Check.info("q-model N of the floor forces (per particle)", fit_q_model(ff).N, SRC,
+                                  "The seed fits the floor with Mueth et al. (a = 3, b = 0.75, β = 1.5) instead."))
+            out.append(Check.info("particles on the floor at 400-600 kPa (mean over snapshots) per m²",
+                                  float(np.mean([s["floor"].size for s in ex["snapshots"]])) / A, SRC,
+                                  "The seed: about 257 bottom contacts on 100 m².", reference=2.57))
+        return out
+
+    def tables(self, run, p):
+        import pandas as pd
+
+        ex = run.extras
+        c = ex["curve"]
+        rows = [{"particles": ex["n_particles"], "settle steps (insert, trimmed)": str(ex["settle_steps"]),
+                 "Δt [s]": ex["dt"], "loading steps": int(c.step.iloc[-1]),
+                 "final plate stress [kPa]": c.plate_stress.iloc[-1] / 1e3,
+                 "final settlement [mm]": c.settlement.iloc[-1] * 1e3}]
+        return [("Run", pd.DataFrame(rows))]
+
+    def figures(self, run, p, outdir):
+        import matplotlib.pyplot as plt
+
+        from ..plotting import save_figure
+
+        ex = run.extras
+        c = ex["curve"]
+        fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+        a1.plot(c.settlement * 1e3, c.plate_stress / 1e3, "k-", label="plate")
+        a1.plot(c.settlement * 1e3, c.floor_stress / 1e3, "b--", label="floor")
+        for s in (100, 400):
+            a1.axhline(s, color="0.7", lw=0.8)
+        a1.set_xlabel("settlement [mm]")
+        a1.set_ylabel("stress [kPa]")
+        a1.set_title("stress-settlement (Miyata Fig. 32 style)")
+        a1.legend()
+        a2.plot(c.plate_stress / 1e3, c.plate_contacts / ex["area"], "k-", label="plate")
+        a2.plot(c.plate_stress / 1e3, c.floor_contacts / ex["area"], "b--", label="floor")
+        a2.set_xlabel("plate stress [kPa]")
+        a2.set_ylabel("particles in contact per m²")
+        a2.legend()
+        paths = [f"{outdir}/stress_settlement.png"]
+        save_figure(fig, paths[0])
+        if ex["snapshots"]:
+            from ..analysis.forces import q_model_pdf
+
+            fp = np.concatenate([s["plate"] / s["plate"].mean() for s in ex["snapshots"]])
+            fig, ax = plt.subplots(figsize=(5, 3.8))
+            ax.hist(fp, bins=15, density=True, color="0.8", label="plate, per particle")
+            f = np.linspace(0.01, fp.max(), 200)
+            ax.plot(f, q_model_pdf(f, 3.0), "r-", label="q-model N = 3 (seed)")
+            ax.set_xlabel("f = F/<F>")
+            ax.set_ylabel("P(f)")
+            ax.legend()
+            paths.append(f"{outdir}/plate_pdf.png")
+            save_figure(fig, paths[1])
+        return paths
