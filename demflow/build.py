@@ -325,7 +325,8 @@ def build(scene: Scene):
         h1, h2 = float(w.h1), float(w.h2)
         geo = (px + h1 * ex, py + h1 * ey, px + h2 * ex, py + h2 * ey, px, py, ex, ey)
         if not all(abs(c) <= MAX_LENGTH for c in geo):
-            raise SceneError(f"scene.walls[{i}] (wall {w.name!r}): point={w.point!r}, h1={w.h1!r}, h2={w.h2!r} put an "
+            p = f"scene.walls[{i}]"
+            raise SceneError(f"{p}.point={w.point!r}, {p}.h1={w.h1!r} and {p}.h2={w.h2!r} (wall {w.name!r}) put an "
                              f"endpoint beyond ±{MAX_LENGTH:g}, where squared distances overflow; give a wall "
                              "within that range (or rescale the length unit)")
         wall_geo.append(geo)

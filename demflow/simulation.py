@@ -405,6 +405,9 @@ class Simulation:
     def _blow_up(self, good, pieces, rec, rec_count, what):
         """Keep the records so far, restore the last good state ``good``, save it and raise BlowUpError;
         ``what`` names a non-finite quantity (None: the cycle's own overlap, jump or force test)."""
+        if what is None:  # name the non-finite quantity behind the cycle's own test, if there is one
+            bad = self._nonfinite_state()
+            what = f"{bad} is not finite" if bad else None
         self._keep_records(pieces, rec, rec_count)
         self._store_records(pieces)
         bad_step = self.step

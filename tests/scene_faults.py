@@ -182,7 +182,7 @@ def _(pick):
 
 @fault("neighbour list", "skin")
 def _(pick):
-    v = pick(BAD_POSITIVE)
+    v = pick([b for b in BAD_POSITIVE if b is not None])  # None is valid: 0.2 × the mean radius
     return _set(pick([base_dry, base_periodic])(), skin=v), "scene.skin", v
 
 
@@ -424,7 +424,7 @@ def _(pick):
 def _(pick):
     v = pick(BAD_VECTOR + [(1e308, 0.0)])
     i = pick([0, 1, 2, 3])
-    return _wall(base_dry(), i, point=v), f"scene.walls[{i}]", v
+    return _wall(base_dry(), i, point=v), f"scene.walls[{i}].point", v
 
 
 @fault("walls", "wall direction")
@@ -439,7 +439,7 @@ def _(pick):
     key = pick(["h1", "h2"])
     v = pick(BAD_FINITE + [5.0 if key == "h1" else -5.0, 1e308 if key == "h2" else -1e308])
     i = pick([0, 2])
-    return _wall(base_dry(), i, **{key: v}), f"scene.walls[{i}]", v
+    return _wall(base_dry(), i, **{key: v}), f"scene.walls[{i}].{key}", v
 
 
 @fault("walls", "wall material")
