@@ -44,15 +44,16 @@ def fuzz(engine: str, n: int, seed: int, sim, scratch: Path, generate_every: int
 
     rng = random.Random(f"{engine}-{seed}")
     outcomes, per_file, per_kind = Counter(), defaultdict(Counter), defaultdict(Counter)
-    failures, generated, leaked = [], 0, []
+    failures, generated, leaked, examples = [], 0, [], {}
     for i in range(n):
         d = scratch / f"{engine}-{i}"
         name, kind = rf.corrupted_dir(engine, d, rng)
         try:
             rf.read(engine, sim, d)
             outcome = "accepted"
-        except EngineOutputError:
+        except EngineOutputError as e:
             outcome = "refused"
+            examples.setdefault(name, dict(kind=kind, message=str(e)[:300]))
         except Exception as e:  # noqa: BLE001 - any other exception is the failure counted here
             outcome = "other"
             failures.append(dict(i=i, file=name, kind=kind, error=f"{type(e).__name__}: {e}"[:300]))
@@ -72,7 +73,8 @@ def fuzz(engine: str, n: int, seed: int, sim, scratch: Path, generate_every: int
             generated += 1
         shutil.rmtree(d, ignore_errors=True)
     return dict(n=n, outcomes=dict(outcomes), files={k: dict(v) for k, v in sorted(per_file.items())},
-                kinds={k: dict(v) for k, v in sorted(per_kind.items())}, failures=failures,
+                kinds={k: dict(v) for k, v in sorted(per_kind.items())}, examples=dict(sorted(examples.items())),
+                failures=failures,
                 through_generate=generated, written_by_generate=leaked)
 
 
@@ -86,9 +88,6 @@ def main(argv=None):
     args = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT / "tests"))
     sys.path.insert(0, str(Path(args.code).resolve()))
-    import warnings
-
-    warnings.simplefilter("ignore")
     import reader_faults as rf
     from demflow import build
 

@@ -42,9 +42,6 @@ def main(argv=None):
     args = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT / "tests"))
     sys.path.insert(0, str(Path(args.code).resolve()))
-    import warnings
-
-    warnings.simplefilter("ignore")
     import scene_faults as sf
 
     rng = random.Random(args.seed)
@@ -52,6 +49,7 @@ def main(argv=None):
     per_cat = defaultdict(Counter)
     per_fault = defaultdict(Counter)
     bad = []
+    examples = {}
     t0 = time.perf_counter()
     for i in range(args.n):
         f = rng.choice(sf.FAULTS)
@@ -60,6 +58,8 @@ def main(argv=None):
         outcomes[kind] += 1
         per_cat[f.category][kind] += 1
         per_fault[f"{f.category}: {f.name}"][kind] += 1
+        examples.setdefault(f"{f.category}: {f.name}", dict(path=path, value=repr(value)[:80], outcome=kind,
+                                                             message=msg[:300]))
         if kind != "clear":
             bad.append(dict(i=i, category=f.category, fault=f.name, path=path, value=repr(value), outcome=kind,
                             message=msg[:400]))
@@ -71,7 +71,8 @@ def main(argv=None):
                wall_time_s=round(wall, 2), outcomes=dict(outcomes), clear_fraction=outcomes["clear"] / args.n,
                categories={c: dict(v) for c, v in sorted(per_cat.items())},
                faults={c: dict(v) for c, v in sorted(per_fault.items())},
-               catalogue=[dict(category=f.category, fault=f.name) for f in sf.FAULTS], not_clear=bad)
+               catalogue=[dict(category=f.category, fault=f.name) for f in sf.FAULTS],
+               examples=dict(sorted(examples.items())), not_clear=bad)
     path = Path(args.out)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")

@@ -252,3 +252,36 @@ def test_a_finite_run_is_unchanged_by_the_check(monkeypatch):
     monkeypatch.setattr(Simulation, "_nonfinite_state", lambda self: None)
     b = build(sf.base_dry()).run()
     assert np.array_equal(a.x, b.x) and np.array_equal(a.records[0][1], b.records[0][1])
+
+
+# ----------------------------------------------------------------------------- the script and the report page
+def test_the_400_scene_script_refuses_all_and_matches_the_committed_results(tmp_path):
+    """benchmarks/fuzz_scenes.py (seeded) run now gives 100 % clear refusals and the very counts the
+    robustness page shows (benchmarks/results/fuzz_scenes.json)."""
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("fuzz_scenes_script", root / "benchmarks" / "fuzz_scenes.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    assert script.main(["--n", "400", "--out", str(tmp_path / "f.json")]) == 0
+    now = json.loads((tmp_path / "f.json").read_text())
+    committed = json.loads((root / "benchmarks" / "results" / "fuzz_scenes.json").read_text())
+    assert now["outcomes"] == {"clear": 400}
+    assert (now["faults"], now["catalogue"]) == (committed["faults"], committed["catalogue"])
+
+
+def test_the_robustness_page_is_rendered_from_the_fuzz_results(tmp_path):
+    from pathlib import Path
+
+    from demflow.report.robustness import render, summary_line
+
+    root = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    page = render(root)
+    assert "400/400 (100.0 %) refused by a SceneError naming the broken field" in page
+    assert "radii: disc radius" in page and "scene.discs.radius[" in page
+    assert "Corrupted engine outputs" in page and "liggghts" in page and "yade_out.json" in page
+    assert "0 unhandled" in summary_line(root)
+    assert render(tmp_path) is None and summary_line(tmp_path) == ""  # nothing run: no page
