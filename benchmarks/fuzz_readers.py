@@ -21,9 +21,6 @@ robustness page (demflow/report/robustness.py).
 """
 from __future__ import annotations
 
-import argparse
-import json
-import os
 import platform
 import random
 import shutil
@@ -34,6 +31,9 @@ from collections import Counter, defaultdict
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from fuzz_scenes import parse_args, write_json  # noqa: E402  (the fuzz scripts' common options and output)
 
 
 def fuzz(engine: str, n: int, seed: int, sim, scratch: Path, generate_every: int = 50):
@@ -79,15 +79,8 @@ def fuzz(engine: str, n: int, seed: int, sim, scratch: Path, generate_every: int
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=1000)
-    ap.add_argument("--seed", type=int, default=19)
-    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "fuzz_readers.json"))
-    ap.add_argument("--code", default=str(ROOT), help="import demflow from this checkout")
-    ap.add_argument("--regenerate", action="store_true", help="rerun the engines to rewrite the fixtures")
-    args = ap.parse_args(argv)
-    sys.path.insert(0, str(ROOT / "tests"))
-    sys.path.insert(0, str(Path(args.code).resolve()))
+    args = parse_args(argv, __doc__, 1000, "fuzz_readers.json",
+                      extra=[("--regenerate", "rerun the engines to rewrite the fixtures")])
     import reader_faults as rf
     from demflow import build
 
@@ -109,12 +102,7 @@ def main(argv=None):
                code=str(Path(demflow.__file__).resolve().parents[1]), n_per_reader=args.n, seed=args.seed,
                wall_time_s=round(wall, 2), reference_runs_unchanged=unchanged, readers=readers,
                files={e: list(f) for e, f in rf.FILES.items()})
-    path = Path(args.out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        json.dump(out, fh, indent=1, default=str)
-    os.replace(tmp, path)
+    path = write_json(args.out, out)
     ok = unchanged
     for engine, r in readers.items():
         print(f"{engine}: {r['n']} corrupted outputs in {wall:.0f} s: "

@@ -33,15 +33,35 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=400)
+def parse_args(argv, doc: str, n: int, out: str, extra=()):
+    """The fuzz scripts' common options (--n, --seed, --out, --code, and ``extra`` (flag, help) switches);
+    puts tests/ (the fault catalogues) and the checkout named by --code first on sys.path."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--n", type=int, default=n)
     ap.add_argument("--seed", type=int, default=19)
-    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "fuzz_scenes.json"))
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / out))
     ap.add_argument("--code", default=str(ROOT), help="import demflow from this checkout")
+    for flag, text in extra:
+        ap.add_argument(flag, action="store_true", help=text)
     args = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT / "tests"))
     sys.path.insert(0, str(Path(args.code).resolve()))
+    return args
+
+
+def write_json(path: str | Path, obj) -> Path:
+    """Write ``obj`` as JSON to ``path`` atomically (temporary file + rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    with os.fdopen(fd, "w") as fh:
+        json.dump(obj, fh, indent=1, default=str)
+    os.replace(tmp, path)
+    return path
+
+
+def main(argv=None):
+    args = parse_args(argv, __doc__, 400, "fuzz_scenes.json")
     import scene_faults as sf
 
     rng = random.Random(args.seed)
@@ -73,12 +93,7 @@ def main(argv=None):
                faults={c: dict(v) for c, v in sorted(per_fault.items())},
                catalogue=[dict(category=f.category, fault=f.name) for f in sf.FAULTS],
                examples=dict(sorted(examples.items())), not_clear=bad)
-    path = Path(args.out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        json.dump(out, fh, indent=1, default=str)
-    os.replace(tmp, path)
+    path = write_json(args.out, out)
     print(f"{args.n} invalid scenes ({len(sf.FAULTS)} fault kinds, seed {args.seed}) in {wall:.1f} s: "
           + ", ".join(f"{k} {v} ({v / args.n:.1%})" for k, v in outcomes.most_common()))
     for c, v in sorted(per_cat.items()):

@@ -243,13 +243,22 @@ def _(pick):
 
 
 # discs -------------------------------------------------------------------------------------
-@fault("radii", "disc radius")
-def _(pick):
-    v = pick(BAD_POSITIVE[:6] + BAD_ENTRY)
-    sc = base_dry()
-    k = pick([0, 1, 2])
-    sc.discs = _set(sc.discs, radius=_entry(sc.discs.radius, k, v))
-    return sc, f"scene.discs.radius[{k}]", v
+def _disc_entry_fault(category, name, key, values, start=None):
+    """One entry k of the per-disc list ``key`` of base_dry (or of ``start``) set to a drawn bad value."""
+    @fault(category, name)
+    def make(pick):
+        v = pick(values)
+        sc = base_dry()
+        k = pick([0, 1, 2])
+        sc.discs = _set(sc.discs, **{key: _entry(getattr(sc.discs, key) if start is None else start, k, v)})
+        return sc, f"scene.discs.{key}[{k}]", v
+    return make
+
+
+_disc_entry_fault("radii", "disc radius", "radius", BAD_POSITIVE[:6] + BAD_ENTRY)
+_disc_entry_fault("masses", "disc mass", "mass", BAD_POSITIVE[:6] + BAD_ENTRY, start=[1.0, 2.0, 3.0])
+_disc_entry_fault("velocities", "disc angular velocity", "angular_velocity", BAD_ENTRY)
+_disc_entry_fault("materials", "disc material undeclared or not a name", "material", ["sand", "G", "g\n", None, 3, ""])
 
 
 @fault("radii", "disc radius overflowing the mass")
@@ -271,15 +280,6 @@ def _(pick):
     return sc, f"scene.discs.{key}[{k}]", v
 
 
-@fault("masses", "disc mass")
-def _(pick):
-    v = pick(BAD_POSITIVE[:6] + BAD_ENTRY)
-    sc = base_dry()
-    k = pick([0, 1, 2])
-    sc.discs = _set(sc.discs, mass=_entry([1.0, 2.0, 3.0], k, v))
-    return sc, f"scene.discs.mass[{k}]", v
-
-
 @fault("velocities", "disc velocity")
 def _(pick):
     sc = base_dry()
@@ -295,15 +295,6 @@ def _(pick):
         path = "scene.discs.velocity"
     sc.discs = _set(sc.discs, velocity=vel)
     return sc, path, v
-
-
-@fault("velocities", "disc angular velocity")
-def _(pick):
-    v = pick(BAD_ENTRY)
-    sc = base_dry()
-    k = pick([0, 1, 2])
-    sc.discs = _set(sc.discs, angular_velocity=_entry(sc.discs.angular_velocity, k, v))
-    return sc, f"scene.discs.angular_velocity[{k}]", v
 
 
 @fault("array lengths", "disc array of the wrong length")
@@ -324,15 +315,6 @@ def _(pick):
     sc = base_dry()
     sc.discs = _set(sc.discs, **{key: v})
     return sc, f"scene.discs.{key}", v
-
-
-@fault("materials", "disc material undeclared or not a name")
-def _(pick):
-    v = pick(["sand", "G", "g\n", None, 3, ""])
-    sc = base_dry()
-    k = pick([0, 1, 2])
-    sc.discs = _set(sc.discs, material=_entry(sc.discs.material, k, v))
-    return sc, f"scene.discs.material[{k}]", v
 
 
 @fault("positions", "initial overlap")
