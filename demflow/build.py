@@ -12,7 +12,7 @@ import numpy as np
 from .contacts.neighbours import point_segment_distance
 from .integrate import critical_time_step
 from .laws import FAMILIES
-from .scene import Scene, SceneError, is_number, type_phrase
+from .scene import Scene, SceneError, check_vector, is_number, type_phrase
 from .space import open_box, periodic_box, wrap
 from .state import PeriodicBox
 from .validate import check_scene
@@ -132,8 +132,6 @@ def _velocities(vel, n):
         rows = vel
     else:
         raise SceneError(f"{path}={vel!r} is {type_phrase(vel)}; give one (vx, vy) per disc")
-    from .scene import check_vector
-
     if not (isinstance(rows, np.ndarray) and rows.dtype.kind in "iuf" and np.all(np.isfinite(rows))):
         for k, row in enumerate(rows):
             check_vector(f"{path}[{k}]", row, 2, unit="length/time")

@@ -18,10 +18,11 @@ from .contacts.forces import pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
+from .scene import MAX_WHOLE, SceneError, check_whole
 from .space import wrap
 from .state import (Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
                     pair_outputs)
-from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps
+from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, NONFINITE, REBUILD, run_steps, state_is_finite
 
 
 class BlowUpError(RuntimeError):
@@ -65,8 +66,6 @@ def recorded_steps(step0: int, n_steps: int, every: int) -> int:
 def check_run_length(path: str, n_steps: int, scene, n: int, nw: int, nt: int, step0: int = 0) -> None:
     """Refuse up front a run whose records, snapshots and (saturated scenes) fluid records would not fit
     in :func:`memory_limit`, with the numbers; memory grows with what is recorded, not with n_steps."""
-    from .scene import MAX_WHOLE, SceneError
-
     if not 0 <= n_steps <= MAX_WHOLE - step0:
         raise SceneError(f"{path}={n_steps} is out of range; give a whole number of steps from 0 to {MAX_WHOLE - step0}")
     every = int(scene.outputs.every)
@@ -329,8 +328,6 @@ class Simulation:
         """
         if n_steps is None:
             n_steps = max(int(self.scene.n_steps) - self.step, 0)
-        from .scene import check_whole
-
         n_steps = check_whole("run(n_steps)", n_steps)
         nt = len(self.track)
         check_run_length("run(n_steps)", n_steps, self.scene, self.n, self.nw, nt, self.step)
@@ -373,14 +370,12 @@ class Simulation:
                     rec, rec_count, self.external_force, self.has_external_force)
                 self.dem_s += time.perf_counter() - t_dem
                 self.step += done
-                if status == BLOWUP:
+                # BLOWUP: an overlap, jump or contact force test failed; NONFINITE: the state on return holds
+                # a NaN or inf no contact saw (a disc in free flight under a NaN gravity or external force, a
+                # wall driven to infinity), found by one O(n) pass per call of the cycle, per chunk or
+                # neighbour-list rebuild, never per pair per step (cost: benchmarks/results/nonfinite_check.md)
+                if status in (BLOWUP, NONFINITE):
                     self._blow_up(good, pieces, rec, rec_count, None)
-                # a non-finite state the cycle cannot see (a disc without contacts under a NaN gravity or
-                # external force, a wall driven to infinity) is caught here, once per call: O(n) per chunk
-                # or neighbour-list rebuild, never per pair per step (the cost is in benchmarks/results)
-                bad = self._nonfinite_state()
-                if bad:
-                    self._blow_up(good, pieces, rec, rec_count, f"{bad} is not finite")
                 if status == REBUILD:
                     self.rebuild()
             rec_count = self._keep_records(pieces, rec, rec_count)
@@ -396,16 +391,20 @@ class Simulation:
         """The first non-finite quantity of the dynamic state (disc positions, rotations, velocities and
         contact force sums, wall points, directions, velocities and forces, contact history), or None."""
         d, w = self.discs, self.walls
+        if state_is_finite(d, w, self.pairs.hist):  # the compiled screen; the names only when it fails
+            return None
         return first_nonfinite({
             "discs.x": d.x, "discs.y": d.y, "discs.vx": d.vx, "discs.vy": d.vy, "discs.om": d.om,
             "discs.th": d.th, "discs.Fx": d.Fx, "discs.Fy": d.Fy, "discs.M": d.M,
             "walls.px": w.px, "walls.py": w.py, "walls.ex": w.ex, "walls.ey": w.ey, "walls.vx": w.vx,
-            "walls.vy": w.vy, "walls.om": w.om, "walls.force": w.force, "pairs.hist": self.pairs.hist})
+            "walls.vy": w.vy, "walls.om": w.om, "walls.cx": w.cx, "walls.cy": w.cy, "walls.force": w.force,
+            "pairs.hist": self.pairs.hist})
 
     def _blow_up(self, good, pieces, rec, rec_count, what):
         """Keep the records so far, restore the last good state ``good``, save it and raise BlowUpError;
-        ``what`` names a non-finite quantity (None: the cycle's own overlap, jump or force test)."""
-        if what is None:  # name the non-finite quantity behind the cycle's own test, if there is one
+        ``what`` names a non-finite quantity (None: the cycle stopped on its own tests, BLOWUP or NONFINITE,
+        and the state is searched for the quantity to name)."""
+        if what is None:  # name the non-finite quantity, if there is one
             bad = self._nonfinite_state()
             what = f"{bad} is not finite" if bad else None
         self._keep_records(pieces, rec, rec_count)

@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from demflow import (BlowUpError, Discs, LinearLaw, Material, Outputs, Scene, SceneError, Wall, build)
 from demflow.scene import check_identifier, check_name
 from demflow.simulation import Simulation, first_nonfinite, record_bytes, recorded_steps
+from demflow.stepping import state_is_finite
 
 import scene_faults as sf
 
@@ -245,13 +246,22 @@ def test_first_nonfinite_finds_every_kind_and_no_false_alarm():
         assert first_nonfinite({"ok": np.ones(3), "a": a}) == f"a[731, 1] = {bad}"
 
 
-def test_a_finite_run_is_unchanged_by_the_check(monkeypatch):
-    """Negative control: the check raises nothing on a sound run, and with it disabled the results are
-    the same to the bit."""
-    a = build(sf.base_dry()).run()
-    monkeypatch.setattr(Simulation, "_nonfinite_state", lambda self: None)
-    b = build(sf.base_dry()).run()
-    assert np.array_equal(a.x, b.x) and np.array_equal(a.records[0][1], b.records[0][1])
+def test_the_compiled_state_check_sees_every_quantity():
+    """state_is_finite (run at the end of every call of the cycle) is True on a sound state and False
+    with a NaN or inf in any one of the quantities it covers; the Python search names the same one."""
+    sim = build(_falling()).run(20)
+    assert sim._nonfinite_state() is None and sim.pairs.hist.size
+    fields = [(sim.discs, f) for f in ("x", "y", "th", "vx", "vy", "om", "Fx", "Fy", "M")]
+    fields += [(sim.walls, f) for f in ("px", "py", "ex", "ey", "vx", "vy", "om", "cx", "cy", "force")]
+    for struct, f in fields + [(sim.pairs, "hist")]:
+        a = getattr(struct, f)
+        for bad in (math.nan, -math.inf):
+            keep = a.flat[-1]
+            a.flat[-1] = bad
+            assert not state_is_finite(sim.discs, sim.walls, sim.pairs.hist), f
+            assert sim._nonfinite_state().split("[")[0].endswith(f), (f, sim._nonfinite_state())
+            a.flat[-1] = keep
+    assert state_is_finite(sim.discs, sim.walls, sim.pairs.hist)
 
 
 # ----------------------------------------------------------------------------- the script and the report page

@@ -109,16 +109,16 @@ def _nonfinite(c: dict | None) -> str:
             "(gravity, an external or fluid force, a contact law, a wall's motion), raises BlowUpError with the "
             "last good state saved (the chunk's start, loadable with <code>load_checkpoint</code>); the message "
             "names the first non-finite quantity. The compiled cycle still stops on an overlap beyond half a "
-            "radius or a non-finite contact force; the state check runs once per call of the cycle (per "
-            "neighbour-list rebuild or chunk), never per pair per step.")
+            "radius or a non-finite contact force; the state check is one compiled pass at the end of each call "
+            "of the cycle (per neighbour-list rebuild or chunk), never per pair per step.")
     if c:
-        rows = "".join(f"<tr><td>{r['n']:,}</td><td>{r['check_us']:.0f}</td><td>{r['checks_per_step']:.3f}</td>"
-                       f"<td>{r['check_share_estimate']:.1e}</td><td>{r['ratio_best']:.3f}; {r['ratio_median']:.3f}"
-                       "</td></tr>" for r in c["rows"])
+        rows = "".join(f"<tr><td>{r['n']:,}</td><td>{r['elements']:,}</td><td>{r['check_us']:.0f}</td>"
+                       f"<td>{r['checks_per_step']:.4f}</td><td>{r['step_ms']:.2f}</td><td>{r['share']:.1e}</td></tr>"
+                       for r in c["rows"])
         text += (f" Its cost on the bench_dem packing ({_e(c['generated'])}, one thread, "
-                 "<code>benchmarks/bench_nonfinite_check.py</code>):</p><table><tr><th>discs</th><th>one check "
-                 "[µs]</th><th>checks per step</th><th>share of the run time</th><th>run time with/without (best; "
-                 f"median; machine noise)</th></tr>{rows}</table>")
+                 "<code>benchmarks/bench_nonfinite_check.py</code>; one check timed from Python, an upper bound):"
+                 "</p><table><tr><th>discs</th><th>values checked</th><th>one check [µs]</th><th>checks per step"
+                 f"</th><th>step [ms]</th><th>share of the run time</th></tr>{rows}</table>")
     else:
         text += "</p>"
     return text
