@@ -12,62 +12,130 @@ import numpy as np
 from .contacts.neighbours import point_segment_distance
 from .integrate import critical_time_step
 from .laws import FAMILIES
-from .scene import Scene, SceneError, check_identifier
+from .scene import Scene, SceneError, check_vector, is_number, type_phrase
 from .space import open_box, periodic_box, wrap
 from .state import PeriodicBox
+from .validate import check_scene
+
+# Coordinates and radii are kept below this magnitude [length]: squared distances (the contact
+# geometry's dx² + dy², R²) of larger values overflow a float64 (1.8e308).
+MAX_LENGTH = 1e150
 
 
-def _as_array(name, v, n):
-    a = np.asarray(v, dtype=np.float64).reshape(-1)
-    if a.shape[0] != n:
-        raise SceneError(f"discs.{name} has {a.shape[0]} entries for {n} discs; give one per disc")
+def _as_array(name, v, n=None):
+    """discs.<name> as a 1-D float64 array of finite numbers (``n`` entries when given), refused with
+    the path of the first bad entry (a bool, a string, None, a non-finite number)."""
+    path = f"scene.discs.{name}"
+    if isinstance(v, np.ndarray):
+        if v.ndim != 1 or v.dtype.kind not in "iuf":
+            raise SceneError(f"{path} is an array of shape {v.shape} and dtype {v.dtype}; give a 1-D array "
+                             "of numbers, one per disc")
+        a = v.astype(np.float64)
+    elif isinstance(v, (list, tuple)):
+        k = next((k for k, e in enumerate(v) if type(e) is not float and not is_number(e)), None)
+        if k is not None:
+            raise SceneError(f"{path}[{k}]={v[k]!r} is {type_phrase(v[k])}, not a number; give a finite number")
+        a = np.array(v, dtype=np.float64)
+    else:
+        raise SceneError(f"{path}={v!r} is {type_phrase(v)}; give a list or 1-D array of numbers, one per disc")
+    if n is not None and a.shape[0] != n:
+        raise SceneError(f"{path} has {a.shape[0]} entries for {n} discs (len(scene.discs.x)); give one per disc")
     if not np.all(np.isfinite(a)):
         k = int(np.flatnonzero(~np.isfinite(a))[0])
-        raise SceneError(f"discs.{name}[{k}] = {a[k]} is not finite; give a finite number")
+        raise SceneError(f"{path}[{k}]={a[k]} is not finite; give a finite number")
     return a
+
+
+def _check_length_scale(path, a):
+    big = np.flatnonzero(np.abs(a) > MAX_LENGTH)
+    if big.size:
+        k = int(big[0])
+        raise SceneError(f"{path}[{k}]={a[k]:g} is beyond ±{MAX_LENGTH:g}, where squared distances overflow; "
+                         "rescale the scene's length unit")
 
 
 def _check_discs(scene: Scene):
     d = scene.discs
-    n = len(d)
-    x = _as_array("x", d.x, n)
+    x = _as_array("x", d.x)
+    n = x.shape[0]
     y = _as_array("y", d.y, n)
     r = _as_array("radius", d.radius, n)
     bad = np.flatnonzero(r <= 0)
     if bad.size:
         k = int(bad[0])
-        raise SceneError(f"disc {k} has radius {r[k]}; a radius must be > 0")
-    mats = [d.material] * n if isinstance(d.material, str) else list(d.material)
-    if len(mats) != n:
-        raise SceneError(f"discs.material has {len(mats)} entries for {n} discs; give one per disc or one name")
+        raise SceneError(f"scene.discs.radius[{k}]={r[k]}: disc {k} has radius {r[k]}; a radius must be > 0")
+    for name, a in (("x", x), ("y", y), ("radius", r)):
+        _check_length_scale(f"scene.discs.{name}", a)
+    if isinstance(d.material, str):
+        mats = [d.material] * n
+        paths = ["scene.discs.material"] * n
+    else:
+        if not isinstance(d.material, (list, tuple, np.ndarray)):
+            raise SceneError(f"scene.discs.material={d.material!r} is {type_phrase(d.material)}; give one "
+                             "material name or a list of names, one per disc")
+        mats = list(d.material)
+        paths = [f"scene.discs.material[{k}]" for k in range(len(mats))]
+        if len(mats) != n:
+            raise SceneError(f"scene.discs.material has {len(mats)} entries for {n} discs; give one per disc or "
+                             "one name")
     for k, m in enumerate(mats):
-        if m not in scene.materials:
+        if not (isinstance(m, str) and m in scene.materials):
             raise SceneError(
-                f"disc {k} uses material {m!r}, which the scene does not declare; "
+                f"{paths[k]}={m!r}: disc {k} uses material {m!r}, which the scene does not declare; "
                 f"add it to scene.materials (declared: {sorted(scene.materials)})"
             )
     if d.mass is not None:
         mass = _as_array("mass", d.mass, n)
+        bad = np.flatnonzero(mass <= 0)
+        if bad.size:
+            k = int(bad[0])
+            raise SceneError(f"scene.discs.mass[{k}]={mass[k]}: disc {k} has mass {mass[k]}; a mass must be > 0")
     else:
-        rho = np.array([scene.materials[m].density for m in mats], dtype=np.float64)
-        mass = rho * np.pi * r * r
-    bad = np.flatnonzero(mass <= 0)
+        rho = np.array([float(scene.materials[m].density) for m in mats], dtype=np.float64)
+        with np.errstate(over="ignore"):
+            mass = rho * np.pi * r * r
+        bad = np.flatnonzero(mass <= 0)
+        if bad.size:
+            k = int(bad[0])
+            raise SceneError(
+                f"scene.materials[{mats[k]!r}].density={scene.materials[mats[k]].density!r} gives disc {k} the "
+                f"mass {mass[k]} (ρπR²); a disc's mass must be > 0: give the material a density > 0 or give "
+                "scene.discs.mass"
+            )
+    with np.errstate(over="ignore"):
+        inertia = 0.5 * mass * r * r
+    bad = np.flatnonzero(~(np.isfinite(mass) & np.isfinite(inertia)))
     if bad.size:
         k = int(bad[0])
-        raise SceneError(
-            f"disc {k} has mass {mass[k]} (material {mats[k]!r}, density "
-            f"{scene.materials[mats[k]].density}); a mass must be > 0: set a positive density or mass"
-        )
-    inertia = 0.5 * mass * r * r
+        raise SceneError(f"scene.discs.radius[{k}]={r[k]:g}: disc {k}'s mass {mass[k]:g} or moment of inertia "
+                         f"½mR² = {inertia[k]:g} is not finite; give a smaller radius, density or mass (or rescale "
+                         "the units)")
     v = np.zeros((n, 2))
     if d.velocity is not None:
-        v = np.asarray(d.velocity, dtype=np.float64).reshape(n, 2)
-        if not np.all(np.isfinite(v)):
-            raise SceneError("discs.velocity has a non-finite entry; give finite velocities")
+        v = _velocities(d.velocity, n)
     om = np.zeros(n)
     if d.angular_velocity is not None:
         om = _as_array("angular_velocity", d.angular_velocity, n)
     return x, y, r, mats, mass, inertia, v, om
+
+
+def _velocities(vel, n):
+    """scene.discs.velocity as an (n, 2) array of finite numbers."""
+    path = "scene.discs.velocity"
+    if isinstance(vel, np.ndarray) and vel.dtype.kind in "iuf":
+        if vel.shape != (n, 2):
+            raise SceneError(f"{path} has shape {vel.shape} for {n} discs; give an (n, 2) array (vx, vy) per disc")
+        rows = vel
+    elif isinstance(vel, (list, tuple, np.ndarray)):
+        if len(vel) != n:
+            raise SceneError(f"{path} has {len(vel)} entries for {n} discs; give one (vx, vy) per disc")
+        rows = vel
+    else:
+        raise SceneError(f"{path}={vel!r} is {type_phrase(vel)}; give one (vx, vy) per disc")
+    if not (isinstance(rows, np.ndarray) and rows.dtype.kind in "iuf" and np.all(np.isfinite(rows))):
+        for k, row in enumerate(rows):
+            check_vector(f"{path}[{k}]", row, 2, unit="length/time")
+    return np.array(rows, dtype=np.float64).reshape(n, 2)
 
 
 def _check_overlaps(x, y, r, walls, tol, box):
@@ -102,8 +170,9 @@ def _check_overlaps(x, y, r, walls, tol, box):
             lim = tol * r[i]
             what = f"disc {i} and wall {j - n}"
         if ov > lim:
+            where = "scene.discs" if j < n else f"scene.discs and scene.walls[{j - n}]"
             raise SceneError(
-                f"{what} overlap by {ov:.6g} at the start, more than the tolerance {lim:.6g} "
+                f"{where}: {what} overlap by {ov:.6g} at the start, more than the tolerance {lim:.6g} "
                 f"(overlap_tolerance={tol} × radius); move them apart or raise scene.overlap_tolerance"
             )
 
@@ -114,72 +183,54 @@ def _check_fluid(scene: Scene, x, y, r, wall_geo):
     from .bem.geometry import points_in_polygon, signed_area
     from .coupling import FluidSetup, outer_corners
 
-    f = scene.fluid
-
-    def positive(key, v, allow_zero=False):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and (v >= 0 if allow_zero else v > 0)):
-            raise SceneError(f"fluid {key}={v!r}; give a finite number {'>= 0' if allow_zero else '> 0'}")
-        return float(v)
-
-    def whole(key, v, lo):
-        if not (isinstance(v, (int, np.integer)) and v >= lo):
-            raise SceneError(f"fluid {key}={v!r}; give a whole number >= {lo}")
-        return int(v)
-
-    mu = positive("viscosity", f.viscosity)
-    rho = positive("density", f.density, allow_zero=True)
-    n_disc = whole("elements_per_disc", f.elements_per_disc, 8)
-    stride = whole("stride", f.stride, 1)
-    rec = whole("record_every", f.record_every, 1)
-    start = whole("start", f.start, 0)
-    if not (0 < f.safety <= 1):
-        raise SceneError(f"fluid safety={f.safety}; give a fraction in (0, 1] of the drag stability limit 2τ")
+    f = scene.fluid  # every field already checked on its own (Fluid.check)
+    mu, rho = float(f.viscosity), float(f.density)
+    n_disc, stride, rec, start = (int(f.elements_per_disc), int(f.stride), int(f.record_every), int(f.start))
     n = r.shape[0]
     r_min = float(r.min()) if n else 1.0
-    gap = 0.01 * r_min if f.min_gap is None else positive("min_gap", f.min_gap)
+    gap = 0.01 * r_min if f.min_gap is None else float(f.min_gap)
     if gap >= 0.5 * r_min:
-        raise SceneError(f"fluid min_gap={gap} is not small against the smallest radius {r_min}; "
+        raise SceneError(f"scene.fluid.min_gap={gap} is not small against the smallest radius {r_min}; "
                          "give a gap below half of it (thesis §5.3.3 used 0.01 r)")
-    h_max = float(r.mean()) if f.element_length is None else positive("element_length", f.element_length)
+    h_max = float(r.mean()) if f.element_length is None else float(f.element_length)
     names = [w.name for w in scene.walls]
     bnames = list(f.boundary) if f.boundary is not None else names
     if len(bnames) < 3:
-        raise SceneError(f"fluid boundary has {len(bnames)} walls; the fluid needs at least 3 walls around it "
+        raise SceneError(f"scene.fluid.boundary has {len(bnames)} walls; the fluid needs at least 3 walls around it "
                          "(give Fluid.boundary, the walls counter-clockwise around the fluid)")
     for b in bnames:
         if b not in names:
-            raise SceneError(f"fluid boundary names wall {b!r}, which the scene does not have (walls: {names})")
+            raise SceneError(f"scene.fluid.boundary names wall {b!r}, which the scene does not have (walls: {names})")
     if len(set(bnames)) != len(bnames):
-        raise SceneError(f"fluid boundary {bnames} names a wall twice")
+        raise SceneError(f"scene.fluid.boundary {bnames} names a wall twice; name each wall once")
     widx = np.array([names.index(b) for b in bnames], dtype=np.int64)
     g = np.array(wall_geo, dtype=np.float64).reshape(-1, 8)
     try:
         corners = outer_corners(g[widx, 0:2], g[widx, 6:8])
     except ValueError as e:
-        raise SceneError(f"fluid boundary {bnames}: {e}; list the walls in order around the fluid") from None
+        raise SceneError(f"scene.fluid.boundary {bnames}: {e}; list the walls in order around the fluid") from None
     if signed_area(corners) <= 0:
-        raise SceneError(f"fluid boundary {bnames} runs clockwise (or is degenerate); list the walls "
+        raise SceneError(f"scene.fluid.boundary {bnames} runs clockwise (or is degenerate); list the walls "
                          "counter-clockwise around the fluid (thesis §4.3.8)")
     if n:
         inside = points_in_polygon(np.column_stack([x, y]), corners)
         if not np.all(inside):
             k = int(np.flatnonzero(~inside)[0])
-            raise SceneError(f"disc {k} at ({x[k]:.6g}, {y[k]:.6g}) lies outside the fluid boundary {bnames}")
+            raise SceneError(f"scene.discs: disc {k} at ({x[k]:.6g}, {y[k]:.6g}) lies outside the fluid boundary "
+                             f"{bnames} (scene.fluid.boundary); move it inside or list the walls around it")
     lw, lf, ld = [], [], []
-    for ld_ in f.loads:
+    for q, ld_ in enumerate(f.loads):
+        path = f"scene.fluid.loads[{q}]"
         if ld_.wall not in bnames:
-            raise SceneError(f"fluid load on wall {ld_.wall!r}: the wall is not on the fluid boundary {bnames}")
-        F = positive(f"load force on {ld_.wall!r}", ld_.force)
+            raise SceneError(f"{path}.wall={ld_.wall!r} is not on the fluid boundary {bnames}; load a boundary wall")
+        F = float(ld_.force)
         d = np.asarray(ld_.direction, dtype=float)
-        L = float(np.hypot(*d))
-        if not L > 0:
-            raise SceneError(f"fluid load on wall {ld_.wall!r}: direction {ld_.direction} is zero")
-        d = d / L
+        d = d / float(np.hypot(*d))
         w = names.index(ld_.wall)
         ex, ey = g[w, 6], g[w, 7]
         if min(abs(d[0]), abs(d[1])) > 1e-12 or abs(d[0] * ex + d[1] * ey) > 1e-9:
-            raise SceneError(f"fluid load on wall {ld_.wall!r}: direction {tuple(d)} must be along x or y and "
-                             "perpendicular to the wall (the traction replaces one velocity component)")
+            raise SceneError(f"{path}.direction={ld_.direction!r} on wall {ld_.wall!r}: the direction must be along "
+                             "x or y and perpendicular to the wall (the traction replaces one velocity component)")
         lw.append(w)
         lf.append(F)
         ld.append(d)
@@ -207,8 +258,7 @@ def _law_family(used: dict):
 
 def _check_box(scene: Scene, r, x, y):
     """The compiled box of ``scene.box``: open, or periodic (period >= twice the neighbour reach)."""
-    b = scene.box
-    b.check()
+    b = scene.box  # bounds checked by Box.check
     if not b.periodic:
         return open_box()
     (x0, x1) = b.periodic_x if b.periodic_x is not None else (0.0, math.inf)
@@ -217,68 +267,74 @@ def _check_box(scene: Scene, r, x, y):
     skin = scene.skin if scene.skin is not None else (0.2 * float(r.mean()) if r.size else 1.0)
     from .contacts.periodic import check_period
 
+    for axis, bounds in (("x", b.periodic_x), ("y", b.periodic_y)):
+        if bounds is not None:
+            _check_length_scale(f"scene.box.periodic_{axis}", np.asarray(bounds, dtype=np.float64))
     try:
         check_period(box, r, skin)
     except ValueError as e:
-        raise SceneError(f"box: {e}") from None
+        axis = "x" if "along x" in str(e) else "y"
+        raise SceneError(f"scene.box.periodic_{axis}: {e}") from None
     return box
+
+
+def _tracked_pairs(scene: Scene, r):
+    """scene.outputs.track_pairs as (finder, other) keys (a disc index, or n + wall index)."""
+    n = r.shape[0]
+    wall_index = {w.name: k for k, w in enumerate(scene.walls)}
+
+    def body(path, b):
+        if isinstance(b, str) and b.startswith("wall:"):
+            if b[5:] not in wall_index:
+                raise SceneError(f"{path} names wall {b[5:]!r}, which the scene does not have "
+                                 f"(walls: {list(wall_index)}); give 'wall:NAME' of one of them")
+            return n + wall_index[b[5:]]
+        if not (is_number(b) and float(b).is_integer() and 0 <= b < n):
+            raise SceneError(f"{path}={b!r} is not a disc index 0..{n - 1} or 'wall:NAME'; give one of those")
+        return int(b)
+
+    track = []
+    for k, (a, b) in enumerate(scene.outputs.track_pairs):
+        path = f"scene.outputs.track_pairs[{k}]"
+        ia, ib = body(path, a), body(path, b)
+        if ia >= n and ib >= n:
+            raise SceneError(f"{path}=({a!r}, {b!r}) joins two walls; walls do not touch each other, track a disc")
+        if ia >= n or (ib < n and not (r[ia] > r[ib] or (r[ia] == r[ib] and ia < ib))):
+            ia, ib = ib, ia
+        track.append((ia, ib))
+    return track
 
 
 def build(scene: Scene):
     """Check ``scene`` and return a ready :class:`~demflow.simulation.Simulation` (a 3D
     :class:`~demflow.scene3d.Scene3D`: a :class:`~demflow.simulation3d.Simulation3D`)."""
     from .scene3d import Scene3D
-    from .simulation import Simulation
+    from .simulation import Simulation, check_run_length
 
     if isinstance(scene, Scene3D):
         from .build3d import build3d
 
         return build3d(scene)
 
-    check_identifier("scene", scene.name)
-    for m in scene.materials:
-        check_identifier("material", m)
-    scene.contact_model.check()
-    scene.damping.check()
+    check_scene(scene)  # every field on its own and the references between objects (demflow.validate)
     x, y, r, mats, mass, inertia, v, om = _check_discs(scene)
     n = x.shape[0]
 
-    # walls
-    names = set()
+    # walls (fields checked by Wall.check): geometry, with every endpoint within MAX_LENGTH
     wall_geo = []
-    for w in scene.walls:
-        check_identifier("wall", w.name)
-        if w.name in names:
-            raise SceneError(f"two walls are named {w.name!r}; wall names must be unique")
-        names.add(w.name)
-        if w.material not in scene.materials:
-            raise SceneError(f"wall {w.name!r} uses undeclared material {w.material!r}; add it to scene.materials")
+    for i, w in enumerate(scene.walls):
         ex, ey = map(float, w.direction)
         L = math.hypot(ex, ey)
-        if not (L > 0 and math.isfinite(L)):
-            raise SceneError(f"wall {w.name!r} has direction {w.direction}; give a non-zero finite vector")
-        if not (math.isfinite(w.h1) and math.isfinite(w.h2) and w.h1 < w.h2):
-            raise SceneError(f"wall {w.name!r} has h1={w.h1}, h2={w.h2}; need finite h1 < h2 (endpoints P+h1·e, P+h2·e)")
         ex, ey = ex / L, ey / L
         px, py = map(float, w.point)
-        wall_geo.append((px + w.h1 * ex, py + w.h1 * ey, px + w.h2 * ex, py + w.h2 * ey, px, py, ex, ey))
-        for ph in w.phases:
-            if int(ph.cycles) != ph.cycles or ph.cycles < 0:
-                raise SceneError(f"wall {w.name!r}: phase cycles={ph.cycles}; give a whole number >= 0")
-            if not all(math.isfinite(float(c)) for c in (*ph.velocity, ph.omega)):
-                raise SceneError(f"wall {w.name!r}: a phase has a non-finite velocity or omega")
-        if w.servo is not None:
-            s = w.servo
-            if not (s.force > 0 and s.gain > 0 and s.v_max > 0):
-                raise SceneError(
-                    f"wall {w.name!r}: servo force={s.force}, gain={s.gain}, v_max={s.v_max}; all must be > 0"
-                )
-            for step, force in s.schedule:
-                if int(step) != step or step < 0 or not (math.isfinite(force) and force > 0):
-                    raise SceneError(f"wall {w.name!r}: servo schedule entry (step={step}, force={force}); "
-                                     "give a whole step >= 0 and a force > 0")
-            if math.hypot(*s.direction) == 0:
-                raise SceneError(f"wall {w.name!r}: servo direction is zero; give the unit load direction")
+        h1, h2 = float(w.h1), float(w.h2)
+        geo = (px + h1 * ex, py + h1 * ey, px + h2 * ex, py + h2 * ey, px, py, ex, ey)
+        if not all(abs(c) <= MAX_LENGTH for c in geo):
+            p = f"scene.walls[{i}]"
+            raise SceneError(f"{p}.point={w.point!r}, {p}.h1={w.h1!r} and {p}.h2={w.h2!r} (wall {w.name!r}) put an "
+                             f"endpoint beyond ±{MAX_LENGTH:g}, where squared distances overflow; give a wall "
+                             "within that range (or rescale the length unit)")
+        wall_geo.append(geo)
 
     # laws for every material pair that can meet, and the one law family that implements them
     mat_names = sorted(scene.materials)
@@ -289,11 +345,7 @@ def build(scene: Scene):
     needed = [(a, b) for ia, a in enumerate(disc_mats) for b in disc_mats[ia:]
               if (a != b or count[a] >= 2)]
     needed += [(a, b) for a in disc_mats for b in wall_mats]
-    used = {}
-    for a, b in needed:
-        law = scene.law_for(a, b)
-        law.check((a, b))
-        used[(a, b)] = law
+    used = {(a, b): scene.law_for(a, b) for a, b in needed}  # each checked by its key (demflow.validate)
     family = _law_family(used)
     law = family(scene, used, mid)
     k_max = max([law.stiffness_bound(lw) for lw in used.values()], default=0.0)
@@ -301,18 +353,15 @@ def build(scene: Scene):
     # time step
     dt_crit = critical_time_step(mass, k_max)
     if scene.dt is None:
-        if not (0 < scene.dt_fraction <= 1):
-            raise SceneError(f"dt_fraction={scene.dt_fraction}; give a fraction in (0, 1] of the critical time step")
-        dt = scene.dt_fraction * dt_crit
-        if not math.isfinite(dt):
-            raise SceneError("no contact law with stiffness applies, so no critical time step exists; give scene.dt")
+        dt = float(scene.dt_fraction) * dt_crit
+        if not (math.isfinite(dt) and dt > 0):
+            raise SceneError("scene.dt=None: no contact law with stiffness applies (critical time step "
+                             f"{dt_crit:g}), so no time step can be derived; give scene.dt")
     else:
         dt = float(scene.dt)
-        if not (dt > 0 and math.isfinite(dt)):
-            raise SceneError(f"dt={scene.dt}; give a finite time step > 0")
         if dt > dt_crit and not scene.allow_supercritical:
             raise SceneError(
-                f"dt={dt:.6g} is above the critical time step 2√(m_min/k_max) = {dt_crit:.6g} "
+                f"scene.dt: dt={dt:.6g} is above the critical time step 2√(m_min/k_max) = {dt_crit:.6g} "
                 f"(m_min={mass.min():.6g}, k_max={k_max:.6g}); use dt <= {0.1 * dt_crit:.6g} "
                 "(10 % of critical, thesis §2.2.4.4) or set allow_supercritical=True"
             )
@@ -327,36 +376,14 @@ def build(scene: Scene):
         C = d.alpha * mass
         Cr = d.alpha * inertia
     else:
-        C = np.full(n, d.C)
-        Cr = np.full(n, d.C_rot)
-
-    if scene.outputs.every < 0:
-        raise SceneError(f"outputs.every={scene.outputs.every}; give 0 (no records) or a positive step count")
-    skin = scene.skin if scene.skin is not None else (0.2 * float(r.mean()) if n else 1.0)
-    if not (skin > 0 and math.isfinite(skin)):
-        raise SceneError(f"skin={skin}; give a positive neighbour-list margin")
-
-    wall_index = {w.name: k for k, w in enumerate(scene.walls)}
-
-    def body(b):
-        if isinstance(b, str) and b.startswith("wall:"):
-            nm_ = b[5:]
-            if nm_ not in wall_index:
-                raise SceneError(f"tracked pair names wall {nm_!r}, which the scene does not have")
-            return n + wall_index[nm_]
-        b = int(b)
-        if not 0 <= b < n:
-            raise SceneError(f"tracked pair names disc {b}; discs are numbered 0..{n - 1}")
-        return b
-
-    track = []
-    for a, b in scene.outputs.track_pairs:
-        ia, ib = body(a), body(b)
-        if ia >= n and ib >= n:
-            raise SceneError(f"tracked pair ({a}, {b}) joins two walls; walls do not touch each other")
-        if ia >= n or (ib < n and not (r[ia] > r[ib] or (r[ia] == r[ib] and ia < ib))):
-            ia, ib = ib, ia
-        track.append((ia, ib))
+        C = np.full(n, float(d.C))
+        Cr = np.full(n, float(d.C_rot))
+    if not (np.all(np.isfinite(C)) and np.all(np.isfinite(Cr))):
+        raise SceneError(f"scene.damping.alpha={d.alpha!r} times a disc's mass or inertia is not finite; give a "
+                         "smaller alpha")
+    skin = float(scene.skin) if scene.skin is not None else (0.2 * float(r.mean()) if n else 1.0)
+    track = _tracked_pairs(scene, r)
+    check_run_length("scene.n_steps", int(scene.n_steps), scene, n, len(scene.walls), len(track))
 
     fluid = _check_fluid(scene, x, y, r, wall_geo) if scene.fluid is not None else None
 

@@ -40,6 +40,8 @@ def main(argv=None):
     rf.add_argument("--engine", required=True, choices=["yade", "liggghts"])
     rf.add_argument("--variant", action="append", help="only these variants (default: all the engine can express)")
     rf.add_argument("--timeout", type=float, default=600.0)
+    rf.add_argument("--seal", action="store_true", help="do not run the engine: add meta.sha256 (the hash of meta.json) "
+                                                        "to the stored references, after verifying their files")
     cp = sub.add_parser("compare", help="compare engines on a case and write its comparison page")
     cp.add_argument("case", choices=list(comparison_cases()))
     cp.add_argument("--engines", default="demflow,yade,liggghts")
@@ -79,6 +81,16 @@ def main(argv=None):
         from .engines import reference
 
         plan = get_case(args.case).reference_plan()
+        if args.seal:
+            stored = [v for v, engines in reference.available(plan.store).items() if args.engine in engines]
+            for v in args.variant or stored:
+                try:
+                    done = reference.seal(reference.location(plan.store, v, args.engine))
+                except EngineError as e:
+                    print(f"demflow: {e}", file=sys.stderr)
+                    return 1
+                print(f"{'sealed' if done else 'already sealed'} {reference.location(plan.store, v, args.engine)}")
+            return 0
         can = list(plan.variants(args.engine))
         variants = args.variant or can
         bad = [v for v in variants if v not in can]

@@ -13,17 +13,19 @@ C&S's "units"); docstrings give dimensions.  A 2D disc has unit thickness: its m
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
 
-_IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_\-]{0,63}$")
+_IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_\-]{0,63}")  # matched in full (re.fullmatch: no trailing newline)
+_IDENT_RULE = "use 1-64 characters, a letter first, then letters, digits, '_' or '-'"
 
 
 class SceneError(ValueError):
-    """A scene that cannot be built; the message names the value, the constraint and the fix."""
+    """A scene that cannot be built; the message names the field, the value, the constraint and the fix."""
 
 
 def check_identifier(kind: str, name: str) -> str:
@@ -32,12 +34,126 @@ def check_identifier(kind: str, name: str) -> str:
     They may end up in engine decks (YADE decks are Python programs), so nothing else is
     accepted.
     """
-    if not isinstance(name, str) or not _IDENT.match(name):
-        raise SceneError(
-            f"{kind} name {name!r} is not an identifier: use 1-64 characters, a letter "
-            "first, then letters, digits, '_' or '-'"
-        )
+    if not isinstance(name, str) or not _IDENT.fullmatch(name):
+        raise SceneError(f"{kind} name {name!r} is not an identifier: {_IDENT_RULE}")
     return name
+
+
+# ---------------------------------------------------------------------------- field checks
+# Every check names the field by its dotted path from the scene (``scene.walls[2].servo.v_max``),
+# the value, the rule it breaks and the fix, and returns the value in its plain Python form.
+
+def is_number(v) -> bool:
+    """A real number: int, float or a NumPy integer/floating scalar, never a bool."""
+    return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
+
+
+def type_phrase(v) -> str:
+    """'a str', 'an int': the type of ``v`` with its article, for messages."""
+    name = type(v).__name__
+    return f"{'an' if name[0] in 'aeiou' else 'a'} {name}"
+
+
+def _bounds_text(gt, ge, lt, le) -> str:
+    parts = [f"> {gt:g}" if gt is not None else f">= {ge:g}" if ge is not None else "",
+             f"< {lt:g}" if lt is not None else f"<= {le:g}" if le is not None else ""]
+    return " and ".join(p for p in parts if p)
+
+
+def check_number(path: str, v, *, gt=None, ge=None, lt=None, le=None, unit: str = "") -> float:
+    """A finite real number within the given bounds (gt: >, ge: >=, lt: <, le: <=)."""
+    rule = _bounds_text(gt, ge, lt, le)
+    fix = f"give a finite number{' ' + rule if rule else ''}{' [' + unit + ']' if unit else ''}"
+    if not is_number(v):
+        raise SceneError(f"{path}={v!r} is {type_phrase(v)}, not a number; {fix}")
+    try:
+        f = float(v)
+    except OverflowError:
+        f = math.inf
+    if not math.isfinite(f):
+        raise SceneError(f"{path}={v!r} is not finite; {fix}")
+    if ((gt is not None and not f > gt) or (ge is not None and not f >= ge) or (lt is not None and not f < lt)
+            or (le is not None and not f <= le)):
+        raise SceneError(f"{path}={v!r} breaks the rule {path.rsplit('.', 1)[-1]} {rule}; {fix}")
+    return f
+
+
+# step counts and other whole numbers stay far below what an int64 step counter holds
+MAX_WHOLE = 2 ** 62
+
+
+def check_whole(path: str, v, *, ge: int = 0, le: int = MAX_WHOLE, allowed=None) -> int:
+    """A whole number (an int, or a float with an integral value) with ge <= v <= le (and in
+    ``allowed`` when given)."""
+    fix = (f"give one of {list(allowed)}" if allowed is not None else
+           f"give a whole number >= {ge}" + (f" and <= {le}" if le != MAX_WHOLE else ""))
+    if not is_number(v):
+        raise SceneError(f"{path}={v!r} is {type_phrase(v)}, not a whole number; {fix}")
+    if isinstance(v, (numbers.Integral, np.integer)):
+        k = int(v)
+    else:
+        f = float(v)
+        if not (math.isfinite(f) and f.is_integer()):
+            raise SceneError(f"{path}={v!r} is not a whole number; {fix}")
+        k = int(f)
+    if k > le:
+        raise SceneError(f"{path}={v!r} is above {le}, the largest count demflow takes; give a whole number "
+                         f"from {ge} to {le}")
+    if k < ge or (allowed is not None and k not in allowed):
+        raise SceneError(f"{path}={v!r} is out of range; {fix}")
+    return k
+
+
+def check_flag(path: str, v) -> bool:
+    """A bool (True or False; NumPy's bool too), not a number or a string."""
+    if not isinstance(v, (bool, np.bool_)):
+        raise SceneError(f"{path}={v!r} is {type_phrase(v)}, not a bool; give True or False")
+    return bool(v)
+
+
+def check_choice(path: str, v, options) -> str:
+    """One of ``options`` (strings), compared exactly."""
+    if not (isinstance(v, str) and v in options):
+        raise SceneError(f"{path}={v!r} is not one of {list(options)}; give one of them")
+    return v
+
+
+def check_name(path: str, v) -> str:
+    """An identifier (see :func:`check_identifier`), matched in full."""
+    if not isinstance(v, str) or not _IDENT.fullmatch(v):
+        raise SceneError(f"{path}={v!r} is not an identifier: {_IDENT_RULE}")
+    return v
+
+
+def check_items(path: str, v, *, kinds=(tuple, list)) -> list:
+    """A sequence (tuple or list; never a string), as a list."""
+    if isinstance(v, np.ndarray) and v.ndim == 1 and np.ndarray in kinds:
+        return list(v)
+    if not isinstance(v, tuple(k for k in kinds if k is not np.ndarray)):
+        raise SceneError(f"{path}={v!r} is {type_phrase(v)}; give a "
+                         f"{' or '.join(k.__name__ for k in kinds)} of entries")
+    return list(v)
+
+
+def check_vector(path: str, v, n: int = 2, *, nonzero: bool = False, unit: str = "") -> tuple:
+    """A tuple of ``n`` finite numbers (a non-zero vector of finite length with ``nonzero``)."""
+    what = f"{n} finite numbers" + (", not all zero" if nonzero else "") + (f" [{unit}]" if unit else "")
+    if isinstance(v, np.ndarray):
+        v = tuple(v.tolist()) if v.ndim == 1 else v
+    if not isinstance(v, (tuple, list)) or len(v) != n:
+        raise SceneError(f"{path}={v!r} is not a vector of {n} numbers; give {what}")
+    out = tuple(check_number(f"{path}[{k}]", c) for k, c in enumerate(v))
+    if nonzero and not (0.0 < math.hypot(*out) < math.inf):
+        raise SceneError(f"{path}={v!r} has length {math.hypot(*out):g}; give {what}, with a finite length")
+    return out
+
+
+def check_type(path: str, v, cls, what: str = ""):
+    """``v`` is an instance of ``cls``."""
+    if not isinstance(v, cls):
+        names = " or ".join(c.__name__ for c in (cls if isinstance(cls, tuple) else (cls,)))
+        raise SceneError(f"{path}={v!r} is {type_phrase(v)}; give a {names}{what}")
+    return v
 
 
 @dataclass(frozen=True)
@@ -49,6 +165,13 @@ class Material:
     density: float = 0.0
     young: float | None = None
     poisson: float | None = None
+
+    def check(self, path: str) -> None:
+        check_number(f"{path}.density", self.density, ge=0.0, unit="mass/length²")
+        if self.young is not None and not (is_number(self.young) and float(self.young) == math.inf):
+            check_number(f"{path}.young", self.young, gt=0.0, unit="force/length²; inf: a rigid wall")
+        if self.poisson is not None:
+            check_number(f"{path}.poisson", self.poisson, gt=-1.0, lt=0.5)
 
 
 @dataclass(frozen=True)
@@ -69,14 +192,12 @@ class LinearLaw:
     cohesion: float = 0.0
 
     def check(self, pair: tuple[str, str]) -> None:
-        for key in ("kn", "ks", "cn", "cs", "friction", "cohesion"):
-            v = getattr(self, key)
-            if not (isinstance(v, (int, float)) and math.isfinite(v)):
-                raise SceneError(f"law {pair}: {key}={v!r} is not a finite number")
-            if v < 0:
-                raise SceneError(f"law {pair}: {key}={v} is negative; give {key} >= 0")
-        if self.kn <= 0:
-            raise SceneError(f"law {pair}: kn={self.kn} must be > 0 (a contact needs a normal spring)")
+        """``pair`` is the law's key in scene.laws; the message names scene.laws[pair].<field>."""
+        path = f"scene.laws[{pair!r}]"
+        check_number(f"{path}.kn", self.kn, gt=0.0, unit="force/length; a contact needs a normal spring")
+        for key, unit in (("ks", "force/length"), ("cn", "force·time/length"), ("cs", "force·time/length"),
+                          ("friction", "tan φ"), ("cohesion", "force")):
+            check_number(f"{path}.{key}", getattr(self, key), ge=0.0, unit=unit)
 
 
 @dataclass(frozen=True)
@@ -94,16 +215,13 @@ class Box:
     periodic_x: tuple[float, float] | None = None
     periodic_y: tuple[float, float] | None = None
 
-    def check(self) -> None:
+    def check(self, path: str = "scene.box") -> None:
         for axis, b in (("x", self.periodic_x), ("y", self.periodic_y)):
             if b is None:
                 continue
-            try:
-                lo, hi = (float(v) for v in b)
-            except (TypeError, ValueError):
-                raise SceneError(f"box periodic_{axis}={b!r}; give the bounds as two numbers (lo, hi)") from None
-            if not (math.isfinite(lo) and math.isfinite(hi) and hi > lo):
-                raise SceneError(f"box periodic_{axis}=({lo}, {hi}); give finite bounds with hi > lo")
+            lo, hi = check_vector(f"{path}.periodic_{axis}", b, 2, unit="length")
+            if not hi > lo:
+                raise SceneError(f"{path}.periodic_{axis}={b!r} has hi <= lo; give finite bounds (lo, hi) with hi > lo")
 
     @property
     def periodic(self) -> bool:
@@ -125,11 +243,9 @@ class ContactModel:
     normal: str = "incremental"
     sliding: str = "cs"
 
-    def check(self) -> None:
-        if self.normal not in ("incremental", "overlap"):
-            raise SceneError(f"contact model normal={self.normal!r}: use 'incremental' or 'overlap'")
-        if self.sliding not in ("cs", "thesis"):
-            raise SceneError(f"contact model sliding={self.sliding!r}: use 'cs' or 'thesis'")
+    def check(self, path: str = "scene.contact_model") -> None:
+        check_choice(f"{path}.normal", self.normal, ("incremental", "overlap"))
+        check_choice(f"{path}.sliding", self.sliding, ("cs", "thesis"))
 
 
 @dataclass(frozen=True)
@@ -145,14 +261,13 @@ class GlobalDamping:
     C_rot: float = 0.0
     alpha: float = 0.0
 
-    def check(self) -> None:
-        for key in ("C", "C_rot", "alpha"):
-            v = getattr(self, key)
-            if not math.isfinite(v) or v < 0:
-                raise SceneError(f"global damping {key}={v} must be finite and >= 0")
+    def check(self, path: str = "scene.damping") -> None:
+        for key, unit in (("C", "force·time/length"), ("C_rot", "force·length·time"), ("alpha", "1/time")):
+            check_number(f"{path}.{key}", getattr(self, key), ge=0.0, unit=unit)
         if self.alpha > 0 and (self.C > 0 or self.C_rot > 0):
             raise SceneError(
-                "global damping: give either alpha (C&S eq 34) or C/C_rot (thesis eq 2.27), not both"
+                f"{path}: alpha={self.alpha!r} together with C={self.C!r}, C_rot={self.C_rot!r}; give either "
+                "alpha (C&S eq 34) or C/C_rot (thesis eq 2.27), not both"
             )
 
 
@@ -169,6 +284,13 @@ class Phase:
     velocity: tuple[float, float] = (0.0, 0.0)
     omega: float = 0.0
     pivot: tuple[float, float] | None = None
+
+    def check(self, path: str) -> None:
+        check_whole(f"{path}.cycles", self.cycles)
+        check_vector(f"{path}.velocity", self.velocity, 2, unit="length/time")
+        check_number(f"{path}.omega", self.omega, unit="rad/time")
+        if self.pivot is not None:
+            check_vector(f"{path}.pivot", self.pivot, 2, unit="length")
 
 
 @dataclass(frozen=True)
@@ -190,6 +312,19 @@ class Servo:
     v_max: float
     start: int = 0
     schedule: tuple[tuple[int, float], ...] = ()
+
+    def check(self, path: str) -> None:
+        check_number(f"{path}.force", self.force, gt=0.0, unit="force")
+        check_vector(f"{path}.direction", self.direction, 2, nonzero=True)
+        check_number(f"{path}.gain", self.gain, gt=0.0, unit="length/time")
+        check_number(f"{path}.v_max", self.v_max, gt=0.0, unit="length/time")
+        check_whole(f"{path}.start", self.start)
+        for k, entry in enumerate(check_items(f"{path}.schedule", self.schedule)):
+            if not (isinstance(entry, (tuple, list)) and len(entry) == 2):
+                raise SceneError(f"{path}.schedule[{k}]={entry!r} is not a (step, force) pair; give "
+                                 "(whole step >= 0, force > 0)")
+            check_whole(f"{path}.schedule[{k}].step", entry[0])
+            check_number(f"{path}.schedule[{k}].force", entry[1], gt=0.0, unit="force")
 
     def force_at(self, step: int) -> float:
         """The target force F_A in effect at ``step``."""
@@ -218,6 +353,26 @@ class Wall:
     phases: tuple[Phase, ...] = ()
     servo: Servo | None = None
 
+    def check(self, path: str, materials) -> None:
+        """Fields of one wall (``materials``: the scene's declared material names)."""
+        check_name(f"{path}.name", self.name)
+        check_vector(f"{path}.point", self.point, 2, unit="length")
+        check_vector(f"{path}.direction", self.direction, 2, nonzero=True)
+        h1 = check_number(f"{path}.h1", self.h1, unit="length")
+        h2 = check_number(f"{path}.h2", self.h2, unit="length")
+        if not h1 < h2:
+            raise SceneError(f"{path}.h1={self.h1!r}, {path}.h2={self.h2!r} (wall {self.name!r}); need h1 < h2 "
+                             "(the endpoints are P + h1·e and P + h2·e)")
+        if not (isinstance(self.material, str) and self.material in materials):
+            raise SceneError(f"{path}.material={self.material!r} (wall {self.name!r}) is not declared; add it to "
+                             f"scene.materials (declared: {sorted(materials)})")
+        for k, ph in enumerate(check_items(f"{path}.phases", self.phases)):
+            check_type(f"{path}.phases[{k}]", ph, Phase)
+            ph.check(f"{path}.phases[{k}]")
+        if self.servo is not None:
+            check_type(f"{path}.servo", self.servo, Servo, " or None")
+            self.servo.check(f"{path}.servo")
+
 
 @dataclass(frozen=True)
 class WallLoad:
@@ -234,6 +389,11 @@ class WallLoad:
     wall: str
     force: float
     direction: tuple[float, float] = (0.0, -1.0)
+
+    def check(self, path: str) -> None:
+        check_name(f"{path}.wall", self.wall)
+        check_number(f"{path}.force", self.force, gt=0.0, unit="force")
+        check_vector(f"{path}.direction", self.direction, 2, nonzero=True)
 
 
 @dataclass(frozen=True)
@@ -281,6 +441,28 @@ class Fluid:
     quadrature: int = 0
     start: int = 0
 
+    def check(self, path: str = "scene.fluid") -> None:
+        """Every field on its own (the walls it names and its geometry are checked by build)."""
+        check_number(f"{path}.viscosity", self.viscosity, gt=0.0, unit="mass/(length·time)")
+        check_number(f"{path}.density", self.density, ge=0.0, unit="mass/length²")
+        if self.boundary is not None:
+            for k, b in enumerate(check_items(f"{path}.boundary", self.boundary)):
+                check_name(f"{path}.boundary[{k}]", b)
+        check_whole(f"{path}.elements_per_disc", self.elements_per_disc, ge=8)
+        for key in ("element_length", "min_gap"):
+            if getattr(self, key) is not None:
+                check_number(f"{path}.{key}", getattr(self, key), gt=0.0, unit="length")
+        check_whole(f"{path}.stride", self.stride, ge=1)
+        check_flag(f"{path}.adaptive", self.adaptive)
+        check_number(f"{path}.safety", self.safety, gt=0.0, le=1.0)
+        check_flag(f"{path}.moments", self.moments)
+        for k, ld in enumerate(check_items(f"{path}.loads", self.loads)):
+            check_type(f"{path}.loads[{k}]", ld, WallLoad)
+            ld.check(f"{path}.loads[{k}]")
+        check_whole(f"{path}.record_every", self.record_every, ge=1)
+        check_whole(f"{path}.quadrature", self.quadrature, ge=-1, allowed=(0, -1, 1, 2, 4, 8, 16, 32, 64))
+        check_whole(f"{path}.start", self.start)
+
 
 @dataclass
 class Discs:
@@ -317,6 +499,16 @@ class Outputs:
     every: int = 1
     snapshots: tuple[int, ...] = ()
     track_pairs: tuple[tuple[int | str, int | str], ...] = ()
+
+    def check(self, path: str = "scene.outputs") -> None:
+        """Every field on its own (build checks the tracked bodies against the scene's discs and walls)."""
+        check_whole(f"{path}.every", self.every)
+        for k, s in enumerate(check_items(f"{path}.snapshots", self.snapshots, kinds=(tuple, list, np.ndarray))):
+            check_whole(f"{path}.snapshots[{k}]", s)
+        for k, pair in enumerate(check_items(f"{path}.track_pairs", self.track_pairs)):
+            if not (isinstance(pair, (tuple, list)) and len(pair) == 2):
+                raise SceneError(f"{path}.track_pairs[{k}]={pair!r} is not a pair (a, b); give two bodies, each a "
+                                 "disc index or 'wall:NAME'")
 
 
 @dataclass
@@ -357,6 +549,6 @@ class Scene:
         if (b, a) in self.laws:
             return self.laws[(b, a)]
         raise SceneError(
-            f"no contact law for material pair ({a!r}, {b!r}); add "
-            f"laws[({a!r}, {b!r})] = LinearLaw(kn=...) to the scene"
+            f"scene.laws has no contact law for material pair ({a!r}, {b!r}), which can meet; add "
+            f"scene.laws[({a!r}, {b!r})] = LinearLaw(kn=...)"
         )

@@ -18,10 +18,11 @@ from .contacts.forces import pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
+from .scene import MAX_WHOLE, SceneError, check_whole
 from .space import wrap
 from .state import (Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
                     pair_outputs)
-from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps
+from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, NONFINITE, REBUILD, run_steps, state_is_finite
 
 
 class BlowUpError(RuntimeError):
@@ -32,6 +33,65 @@ class BlowUpError(RuntimeError):
         self.path = path
 
 
+# ------------------------------------------------------------------ what a run can store
+# Bytes per recorded step: the Records rows (step, wall force and point, tracked fn/fs, energies) held
+# twice while a run's chunks are joined, plus the rows of the result tables built from them
+# (wall_forces 8 columns per wall, tracked 6 per pair, energy 4).
+def record_bytes(nw: int, nt: int) -> int:
+    return 2 * 8 * (3 + 5 * nw + 2 * nt) + 64 * nw + 48 * nt + 32
+
+
+SNAPSHOT_BYTES_PER_DISC = 400  # a particles row (10 columns) and about two contact rows (16 columns)
+
+
+def memory_limit() -> int:
+    """What one run may hold in records and tables [bytes]: half of this machine's physical memory
+    (``DEMFLOW_MEMORY_LIMIT`` in bytes overrides it)."""
+    env = os.environ.get("DEMFLOW_MEMORY_LIMIT")
+    if env:
+        return int(float(env))
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2
+    except (ValueError, OSError, AttributeError):
+        return 8 << 30
+
+
+def recorded_steps(step0: int, n_steps: int, every: int) -> int:
+    """How many of the steps step0 .. step0 + n_steps - 1 are recorded (multiples of ``every``)."""
+    if every <= 0 or n_steps <= 0:
+        return 0
+    return (step0 + n_steps - 1) // every - (step0 - 1) // every
+
+
+def check_run_length(path: str, n_steps: int, scene, n: int, nw: int, nt: int, step0: int = 0) -> None:
+    """Refuse up front a run whose records, snapshots and (saturated scenes) fluid records would not fit
+    in :func:`memory_limit`, with the numbers; memory grows with what is recorded, not with n_steps."""
+    if not 0 <= n_steps <= MAX_WHOLE - step0:
+        raise SceneError(f"{path}={n_steps} is out of range; give a whole number of steps from 0 to {MAX_WHOLE - step0}")
+    every = int(scene.outputs.every)
+    target = step0 + n_steps
+    rows = recorded_steps(step0, n_steps, every)
+    per = record_bytes(nw, nt)
+    need = rows * per
+    snaps = sum(1 for s in scene.outputs.snapshots if step0 <= s <= target)
+    need += snaps * n * SNAPSHOT_BYTES_PER_DISC
+    f = scene.fluid
+    if f is not None:
+        solves = max(target - max(step0, int(f.start)), 0) // int(f.stride) + 1
+        need += (solves // int(f.record_every) + 1) * (n * 128 + 4096)
+    limit = memory_limit()
+    if need > limit:
+        fit = limit // per if per else 0
+        hint = (f"record less often (scene.outputs.every >= {max(-(-n_steps // max(fit, 1)), every + 1)}, or 0 for "
+                "no records), " if rows else "")
+        raise SceneError(
+            f"{path}={n_steps}: the run would hold about {need / 2 ** 30:.4g} GiB ({rows:,} recorded steps × {per} "
+            f"bytes for {nw} walls and {nt} tracked pairs, {snaps} snapshots of {n} discs"
+            f"{', fluid records' if f is not None else ''}), more than the {limit / 2 ** 30:.4g} GiB a run may hold "
+            f"(half of this machine's memory; DEMFLOW_MEMORY_LIMIT overrides it); {hint}shorten the run or take "
+            "fewer snapshots")
+
+
 # arrays that make up the dynamic state (what a checkpoint stores), by the structure that holds them
 _DISC_STATE = ("x", "y", "th", "vx", "vy", "om")
 _WALL_STATE = {"wpx": "px", "wpy": "py", "wex": "ex", "wey": "ey", "wvx": "vx", "wvy": "vy", "wom": "om",
@@ -40,6 +100,19 @@ _PAIR_STATE = ("finder", "other", "hist")
 _STATE = _DISC_STATE + tuple(_WALL_STATE) + _PAIR_STATE
 # wall attributes by their historical names (sim.wpx is sim.walls.px)
 _WALL_ALIASES = dict(_WALL_STATE, wh1="h1", wh2="h2", wmat="mat", wall_force="force")
+
+
+def first_nonfinite(arrays: dict) -> str | None:
+    """"name[index] = value" of the first non-finite entry of the named arrays, or None.  A sum screens
+    each array (NaN and ±inf propagate through it; a sum that overflows only sends it to the exact test)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        for name, a in arrays.items():
+            if a.size and not np.isfinite(a.sum()):
+                bad = np.argwhere(~np.isfinite(a))
+                if bad.size:
+                    idx = tuple(int(i) for i in bad[0])
+                    return f"{name}[{', '.join(map(str, idx))}] = {a[idx]}"
+    return None
 
 
 def _disc_alias(field):
@@ -254,15 +327,20 @@ class Simulation:
         last good state.
         """
         if n_steps is None:
-            n_steps = max(self.scene.n_steps - self.step, 0)
-        target = self.step + int(n_steps)
-        every = int(self.scene.outputs.every)
-        nrec = (n_steps // every + 2) if every > 0 else 0
+            n_steps = max(int(self.scene.n_steps) - self.step, 0)
+        n_steps = check_whole("run(n_steps)", n_steps)
         nt = len(self.track)
+        check_run_length("run(n_steps)", n_steps, self.scene, self.n, self.nw, nt, self.step)
+        target = self.step + n_steps
+        every = int(self.scene.outputs.every)
+        # the records of one chunk (at most CHUNK steps); each chunk's rows are kept as it ends, so memory
+        # grows with what is recorded, not with the run length
+        nrec = (min(n_steps, self.CHUNK) // every + 2) if every > 0 else 0
         rec = Records(every=every, step=np.zeros(nrec, np.int64), wall=np.zeros((nrec, self.nw, 3)),
                       wallpos=np.zeros((nrec, self.nw, 2)), track_a=self.track_a, track_b=self.track_b,
                       track=np.zeros((nrec, nt, 2)), energy=np.zeros((nrec, 2)))
         rec_count = 0
+        pieces = []
         snaps = sorted(s for s in self.scene.outputs.snapshots if self.step <= s <= target)
         last_ckpt = self.step
         changes = sorted({int(st) for w in self.scene.walls if w.servo is not None for st, _ in w.servo.schedule})
@@ -281,6 +359,9 @@ class Simulation:
                 if self.fluid is not None:
                     if self.step >= self._next_solve:
                         self._fluid_update()
+                        bad = first_nonfinite({"the fluid force and buoyancy (external_force)": self.external_force})
+                        if bad:
+                            self._blow_up(good, pieces, rec, rec_count, f"{bad} is not finite after the fluid solve")
                     n_run = min(n_run, self._next_solve - self.step)
                 t_dem = time.perf_counter()
                 done, status, self.disp_walls, rec_count = run_steps(
@@ -289,26 +370,66 @@ class Simulation:
                     rec, rec_count, self.external_force, self.has_external_force)
                 self.dem_s += time.perf_counter() - t_dem
                 self.step += done
-                if status == BLOWUP:
-                    self._store_records(rec_count, rec)
-                    bad_step = self.step
-                    self._restore_state(good)
-                    path = self._save_last_good()
-                    raise BlowUpError(
-                        f"scene {self.scene.name!r} blew up at step {bad_step}: a contact overlapped more "
-                        f"than {MAX_OVERLAP_RATIO:.0%} of a radius, a disc moved more than {MAX_STEP_RATIO:.0%} "
-                        f"of its radius in one step, or a force became non-finite. "
-                        f"Reduce dt (now {self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the "
-                        f"loading rate. Last good state (step {self.step}) saved to {path}", path)
+                # BLOWUP: an overlap, jump or contact force test failed; NONFINITE: the state on return holds
+                # a NaN or inf no contact saw (a disc in free flight under a NaN gravity or external force, a
+                # wall driven to infinity), found by one O(n) pass per call of the cycle, per chunk or
+                # neighbour-list rebuild, never per pair per step (cost: benchmarks/results/nonfinite_check.md)
+                if status in (BLOWUP, NONFINITE):
+                    self._blow_up(good, pieces, rec, rec_count, None)
                 if status == REBUILD:
                     self.rebuild()
+            rec_count = self._keep_records(pieces, rec, rec_count)
             if checkpoint is not None and checkpoint_every and self.step - last_ckpt >= checkpoint_every:
                 self.save_checkpoint(checkpoint)
                 last_ckpt = self.step
-        self._store_records(rec_count, rec)
+        self._store_records(pieces)
         if checkpoint is not None:
             self.save_checkpoint(checkpoint)
         return self
+
+    def _nonfinite_state(self) -> str | None:
+        """The first non-finite quantity of the dynamic state (disc positions, rotations, velocities and
+        contact force sums, wall points, directions, velocities and forces, contact history), or None."""
+        d, w = self.discs, self.walls
+        if state_is_finite(d, w, self.pairs.hist):  # the compiled screen; the names only when it fails
+            return None
+        return first_nonfinite({
+            "discs.x": d.x, "discs.y": d.y, "discs.vx": d.vx, "discs.vy": d.vy, "discs.om": d.om,
+            "discs.th": d.th, "discs.Fx": d.Fx, "discs.Fy": d.Fy, "discs.M": d.M,
+            "walls.px": w.px, "walls.py": w.py, "walls.ex": w.ex, "walls.ey": w.ey, "walls.vx": w.vx,
+            "walls.vy": w.vy, "walls.om": w.om, "walls.cx": w.cx, "walls.cy": w.cy, "walls.force": w.force,
+            "pairs.hist": self.pairs.hist})
+
+    def _blow_up(self, good, pieces, rec, rec_count, what):
+        """Keep the records so far, restore the last good state ``good``, save it and raise BlowUpError;
+        ``what`` names a non-finite quantity (None: the cycle stopped on its own tests, BLOWUP or NONFINITE,
+        and the state is searched for the quantity to name)."""
+        if what is None:  # name the non-finite quantity, if there is one
+            bad = self._nonfinite_state()
+            what = f"{bad} is not finite" if bad else None
+        self._keep_records(pieces, rec, rec_count)
+        self._store_records(pieces)
+        bad_step = self.step
+        self._restore_state(good)
+        path = self._save_last_good()
+        if what is None:
+            why = (f"a contact overlapped more than {MAX_OVERLAP_RATIO:.0%} of a radius, a disc moved more than "
+                   f"{MAX_STEP_RATIO:.0%} of its radius in one step, or a force became non-finite. Reduce dt (now "
+                   f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
+        else:
+            why = (f"{what} (its origin may be gravity (now ({self.gx}, {self.gy})), an external or fluid force, a "
+                   f"contact law or a wall's motion). Check those for NaN or infinite values, then reduce dt (now "
+                   f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
+        raise BlowUpError(f"scene {self.scene.name!r} blew up at step {bad_step}: {why}. Last good state "
+                          f"(step {self.step}) saved to {path}", path)
+
+    @staticmethod
+    def _keep_records(pieces, rec, q) -> int:
+        """Move the first ``q`` rows of the chunk records ``rec`` into ``pieces``; returns 0 (the new count)."""
+        if q:
+            pieces.append((rec.step[:q].copy(), rec.wall[:q].copy(), rec.wallpos[:q].copy(), rec.track[:q].copy(),
+                           rec.energy[:q].copy()))
+        return 0
 
     def _set_servo_targets(self):
         """Servo targets F_A in effect at the current step (Servo.schedule)."""
@@ -330,10 +451,10 @@ class Simulation:
         f.strides.append((self.step, k))
         self._next_solve = self.step + k
 
-    def _store_records(self, q, rec):
-        if q:
-            self.records.append((rec.step[:q].copy(), rec.wall[:q].copy(), rec.wallpos[:q].copy(),
-                                 rec.track[:q].copy(), rec.energy[:q].copy()))
+    def _store_records(self, pieces):
+        """One run's records, its chunks joined, as one entry of ``records``."""
+        if pieces:
+            self.records.append(tuple(np.concatenate(parts) for parts in zip(*pieces)))
 
     # ------------------------------------------------------------------ snapshots
     def contact_table_arrays(self):

@@ -28,6 +28,7 @@ from .walls import move_walls, set_wall_velocities
 DONE = 0
 REBUILD = 1
 BLOWUP = 2
+NONFINITE = 3  # a NaN or inf in the state after the steps (state_is_finite), whatever its origin
 
 # A contact overlapping more than this fraction of the smaller radius is a blow-up
 # (the linear law is only meaningful for overlaps of a few per cent, thesis §2.2.4.7).
@@ -55,6 +56,26 @@ def find_pair(finder, other, a, b, n_keys):
     return -1
 
 
+
+
+@njit
+def _finite(a):
+    for v in a.flat:
+        if not np.isfinite(v):
+            return False
+    return True
+
+
+@njit
+def state_is_finite(d, walls, hist):
+    """True when every dynamic quantity is finite: the discs' positions, rotations, velocities and contact
+    force sums (:class:`~demflow.state.Discs`, disc order), the walls' points, directions, velocities,
+    pivots and forces, and the contact history.  One compiled pass, stopping at the first NaN or inf."""
+    for a in (d.x, d.y, d.th, d.vx, d.vy, d.om, d.Fx, d.Fy, d.M, walls.px, walls.py, walls.ex, walls.ey,
+              walls.vx, walls.vy, walls.om, walls.cx, walls.cy):
+        if not _finite(a):
+            return False
+    return _finite(walls.force) and _finite(hist)
 
 
 @njit
@@ -129,8 +150,11 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
 
     Returns (steps done, status, disp_walls, rec_count): status DONE, REBUILD (the
     neighbour list is stale: the largest disc displacement since the build plus the wall
-    displacement exceeds skin/2) or BLOWUP (non-finite force or overlap beyond
-    MAX_OVERLAP_RATIO of a radius; the step that found it was not applied).
+    displacement exceeds skin/2), BLOWUP (non-finite force or overlap beyond
+    MAX_OVERLAP_RATIO of a radius; the step that found it was not applied) or NONFINITE (the
+    state on return holds a NaN or inf that no contact saw, e.g. a disc in free flight under a
+    NaN gravity or external force, or a wall driven to infinity: one O(n) pass per call,
+    :func:`state_is_finite`, never per step).
 
     The state is gathered into the slot arrays on entry and scattered back on return, so the
     public discs and pairs.hist are in disc and key order between calls (as are Fx, Fy, M: each
@@ -155,6 +179,8 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
                      (slots.M, pub.M)):
         _scatter(src, dst, perm)
     _rows_from(pairs.hist_p, pairs.hist, pairs.pos)
+    if status != BLOWUP and not state_is_finite(pub, walls, pairs.hist):
+        status = NONFINITE
     return done, status, disp_walls, rec_count
 
 

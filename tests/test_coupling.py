@@ -45,7 +45,7 @@ def test_dry_scene_builds_nothing_fluid():
     (Fluid(viscosity=1.0, boundary=("bottom", "left", "top", "right")), "clockwise"),
     (Fluid(viscosity=1.0, boundary=("bottom", "top", "right")), "parallel"),
     (Fluid(viscosity=1.0, loads=(WallLoad("top", 1.0, (1.0, -1.0)),)), "perpendicular"),
-    (Fluid(viscosity=1.0, loads=(WallLoad("top", -1.0),)), "load force"),
+    (Fluid(viscosity=1.0, loads=(WallLoad("top", -1.0),)), r"scene\.fluid\.loads\[0\]\.force=-1\.0"),
 ])
 def test_bad_fluid_input_is_refused_with_a_message(fluid, words):
     with pytest.raises(SceneError, match=words):

@@ -86,7 +86,7 @@ def pairs_periodic(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, box):
     sy[is_ghost] = gsy[q]
     other[is_wall] = oe[is_wall] - ng
     # a ghost partner is listed under the real finder rule only (the mirror pair has the other finder)
-    rf, ro = r[fe], r[other]
+    rf, ro = r[fe], r[np.where(is_wall, fe, other)]  # a wall partner has no radius (and is never a ghost)
     finds = (rf > ro) | ((rf == ro) & (fe < other))  # _finds on real indices
     ok = ~is_ghost | finds
     fe, other, sx, sy = fe[ok], other[ok], sx[ok], sy[ok]

@@ -247,23 +247,31 @@ class LiggghtsEngine(Engine):
         return ["stdbuf", "-o0", "-e0", self.path(), "-in", "deck.in", "-log", "log.liggghts", "-echo", "none"]
 
     def read(self, scene, sim, outdir: Path):
+        """The result tables of a LIGGGHTS run in ``outdir``.  Every file is checked before use (its
+        layout, row and column counts, finite numbers, body ids in range, the timesteps the deck
+        asked for, in order); anything else raises EngineOutputError naming the file."""
         outdir = Path(outdir)
         log = outdir / "log.liggghts"
-        if not log.exists() or "DEMFLOW-COMPLETE" not in log.read_text(errors="replace"):
+        try:
+            complete = "DEMFLOW-COMPLETE" in log.read_text(errors="replace")
+        except OSError:
+            complete = False
+        if not complete:
             raise EngineOutputError(f"LIGGGHTS did not complete scene {scene.name!r} (no completion mark in {log}); "
                                     "the output is truncated; rerun the engine")
-        try:
-            walls = np.loadtxt(outdir / "walls.txt", ndmin=2)
-            pairs = _read_local(outdir / "contacts.txt", 16)
-            wallc = _read_local(outdir / "wallcontacts.txt", 16)
-            parts = _read_local(outdir / "particles.txt", 7, atoms=True)
-        except (OSError, ValueError) as e:
-            raise EngineOutputError(f"LIGGGHTS output in {outdir} is missing or truncated ({e}); rerun the engine") from None
         every = max(int(scene.outputs.every), 1)
         n, nw = sim.n, sim.nw
+        n_steps = int(scene.n_steps)
+        walls = _read_rows(outdir / "walls.txt", 1 + 3 * nw)
+        if walls.shape[0] != n_steps // every:  # fix print: steps every, 2·every, ... up to n_steps
+            raise EngineOutputError(f"LIGGGHTS walls.txt has {walls.shape[0]} rows, expected {n_steps // every} (one "
+                                    f"every {every} steps to step {n_steps}); the output is truncated or corrupt; "
+                                    "rerun the engine")
+        dumps = np.arange(0, n_steps + 1, every)  # dumps: steps 0, every, ... up to n_steps
+        pairs = _read_local(outdir / "contacts.txt", 16, dumps, {6: n, 7: n})
+        wallc = _read_local(outdir / "wallcontacts.txt", 16, dumps, {6: nw - 1, 8: n}, wall_col=6)
+        parts = _read_local(outdir / "particles.txt", 7, dumps, {0: n}, atoms=n)
         steps = every * np.arange(1, walls.shape[0] + 1, dtype=np.int64)
-        if walls.shape[1] != 1 + 3 * nw:
-            raise EngineOutputError(f"LIGGGHTS walls.txt has {walls.shape[1]} columns, expected {1 + 3 * nw}")
         wall = walls[:, 1:].reshape(-1, nw, 3)
         ppos = _wall_p_history(sim, steps)
         track = np.zeros((len(steps), len(sim.track), 2))
@@ -330,26 +338,99 @@ def _pair_from_dumps(prow, wrow, a, b, n):
     return 0.0, 0.0
 
 
-def _read_local(path: Path, ncol: int, atoms: bool = False) -> dict:
-    """Parse a LAMMPS-style dump into {timestep: array (rows, ncol)}."""
+def _bad_output(path: Path, line: int | None, what: str):
+    where = f"{path.name}" + (f", line {line}" if line is not None else "")
+    return EngineOutputError(f"LIGGGHTS output {where}: {what}; the output is truncated or corrupt; rerun the engine "
+                             f"(files in {path.parent})")
+
+
+def _text(path: Path) -> str:
+    try:
+        return Path(path).read_text()
+    except (OSError, ValueError) as e:  # missing, unreadable, or not text (UnicodeDecodeError)
+        raise _bad_output(Path(path), None, f"cannot be read ({type(e).__name__}: {e})") from None
+
+
+def _numbers(path: Path, line: int, text: str, ncol: int) -> list:
+    """The ``ncol`` finite numbers of one data line."""
+    fields = text.split()
+    if len(fields) != ncol:
+        raise _bad_output(path, line, f"{len(fields)} values where {ncol} are expected")
+    try:
+        row = [float(v) for v in fields]
+    except ValueError:
+        raise _bad_output(path, line, f"not a number in {text[:80]!r}") from None
+    if not all(math.isfinite(v) for v in row):
+        raise _bad_output(path, line, f"a non-finite value in {text[:80]!r}")
+    return row
+
+
+def _whole(path: Path, line: int, text: str) -> int:
+    try:
+        k = int(text.strip())
+    except ValueError:
+        raise _bad_output(path, line, f"{text[:40]!r} is not a whole number") from None
+    if k < 0:
+        raise _bad_output(path, line, f"{k} is negative")
+    return k
+
+
+def _read_rows(path: Path, ncol: int) -> np.ndarray:
+    """A whitespace table of finite numbers, ``ncol`` per line (``fix print`` output)."""
+    lines = _text(path).splitlines()
+    rows = [_numbers(path, k + 1, ln, ncol) for k, ln in enumerate(lines) if ln.strip()]
+    return np.array(rows, dtype=float).reshape(len(rows), ncol)
+
+
+def _read_local(path: Path, ncol: int, steps, ids: dict, *, atoms: int = 0, wall_col: int | None = None) -> dict:
+    """Parse a LAMMPS-style dump into {timestep: array (rows, ncol)}.
+
+    The dump must hold exactly the timesteps ``steps``, in order, each block a header (TIMESTEP, NUMBER OF
+    ENTRIES or ATOMS, BOX BOUNDS and its three lines, ENTRIES or ATOMS) and its rows of ``ncol`` finite
+    numbers; ``ids`` maps a column to the largest id it may hold (1-based atom ids, or from 0 in
+    ``wall_col``); with ``atoms`` every block lists atoms 1..atoms once each."""
+    lines = _text(path).splitlines()
+    head = "ITEM: ATOMS" if atoms else "ITEM: ENTRIES"
+    count_head = "ITEM: NUMBER OF ATOMS" if atoms else "ITEM: NUMBER OF ENTRIES"
     out = {}
-    lines = Path(path).read_text().splitlines()
     k = 0
     while k < len(lines):
-        if lines[k].startswith("ITEM: TIMESTEP"):
-            step = int(lines[k + 1])
-            count = int(lines[k + 3])
-            k += 4
-            while not lines[k].startswith("ITEM: ENTRIES") and not lines[k].startswith("ITEM: ATOMS"):
-                k += 1
-            rows = [list(map(float, ln.split())) for ln in lines[k + 1:k + 1 + count]]
-            if len(rows) != count or any(len(r) != ncol for r in rows):
-                raise ValueError(f"{path.name}: step {step} has {len(rows)} of {count} rows")
-            out[step] = np.array(rows).reshape(count, ncol)
-            k += 1 + count
-        else:
+        if not lines[k].strip():
             k += 1
+            continue
+        if lines[k].rstrip() != "ITEM: TIMESTEP":
+            raise _bad_output(path, k + 1, f"expected 'ITEM: TIMESTEP', found {lines[k][:60]!r}")
+        if k + 8 >= len(lines):
+            raise _bad_output(path, k + 1, "a block header is cut short")
+        step = _whole(path, k + 2, lines[k + 1])
+        if lines[k + 2].rstrip() != count_head or not lines[k + 4].startswith("ITEM: BOX BOUNDS") \
+                or not lines[k + 8].startswith(head):
+            raise _bad_output(path, k + 1, f"the header of timestep {step} is not {count_head}, BOX BOUNDS, {head}")
+        count = _whole(path, k + 4, lines[k + 3])
+        if step in out or (out and step < max(out)):
+            raise _bad_output(path, k + 2, f"timestep {step} is repeated or out of order")
+        first = k + 9
+        if first + count > len(lines):
+            raise _bad_output(path, k + 4, f"timestep {step} announces {count} rows, the file holds "
+                                           f"{len(lines) - first}")
+        rows = np.array([_numbers(path, first + q + 1, lines[first + q], ncol) for q in range(count)],
+                        dtype=float).reshape(count, ncol)
+        for col, top in ids.items():
+            v = rows[:, col]
+            lo = 0 if col == wall_col else 1
+            if not (np.all(v == np.round(v)) and np.all(v >= lo) and np.all(v <= top)):
+                raise _bad_output(path, first + 1, f"timestep {step}: column {col + 1} holds an id outside {lo}..{top}")
+        if atoms and not np.array_equal(np.sort(rows[:, 0]), np.arange(1, atoms + 1)):
+            raise _bad_output(path, first + 1, f"timestep {step} does not list atoms 1..{atoms} once each")
+        out[step] = rows
+        k = first + count
+    if list(out) != [int(s) for s in steps]:
+        raise _bad_output(path, None, f"it holds timesteps {_span(list(out))}, the deck wrote {_span(list(steps))}")
     return out
+
+
+def _span(steps) -> str:
+    return f"{steps[:3]}...{steps[-1:]} ({len(steps)})" if len(steps) > 4 else str([int(s) for s in steps])
 
 
 def _wall_p_history(sim, steps):

@@ -1,10 +1,14 @@
 """Stored reference runs: ``reference_runs/<case>/<variant>/<engine>/``.
 
 Each holds the deck the engine ran, its log, the parsed tables (Parquet) and ``meta.json``
-(engine, version, command, wall time, date, sha256 of every input and output file).
+(engine, version, command, wall time, date, sha256 of every input and output file), and
+``meta.sha256``, the sha256 of ``meta.json`` itself (``sha256sum -c meta.sha256`` checks it), so
+that meta.json, which the tables' metadata is loaded from, is covered by the hash check too.
 :func:`generate` writes one only after the engine succeeded and its output parsed (into a
 temporary directory renamed into place), so a failed run leaves nothing behind;
-:func:`load` verifies every hash before use.
+:func:`load` verifies every hash before use.  :func:`seal` adds ``meta.sha256`` to a reference
+stored before it existed, after verifying every other file (``demflow reference CASE --engine E
+--seal``).
 """
 from __future__ import annotations
 
@@ -22,9 +26,11 @@ README = """# Reference run: {case} / {variant} / {engine}
 Produced by `demflow reference {case} --engine {engine} --variant {variant}` with {engine} {version}
 on {date} ({wall_time_s} s). The deck (`deck.*`, `scene.json`, meshes) is exactly what the engine
 ran; `engine.log` its output; `*.parquet` the parsed tables in demflow's common format.
-`meta.json` lists the sha256 of every file: demflow refuses a reference whose files do not
-match (regenerate it with the command above; never edit by hand).
+`meta.json` lists the sha256 of every file and `meta.sha256` that of `meta.json`: demflow refuses a
+reference whose files do not match (regenerate it with the command above; never edit by hand).
 """
+
+SEAL = "meta.sha256"
 
 
 def root() -> Path:
@@ -46,7 +52,19 @@ def generate(case: str, variant: str, engine, scene, *, params: dict | None = No
              timeout: float = 600.0) -> Path:
     """Run ``engine`` on ``scene`` and store the result; returns the reference directory."""
     dest = location(case, variant, engine.name, base)
+    made = [p for p in (dest.parent, dest.parent.parent) if not p.exists()]  # removed again on failure
     dest.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        _generate(case, variant, engine, scene, params, dest, timeout)
+    except BaseException:
+        for p in made:
+            if p.is_dir() and not any(p.iterdir()):
+                p.rmdir()
+        raise
+    return dest
+
+
+def _generate(case, variant, engine, scene, params, dest: Path, timeout: float) -> None:
     with tempfile.TemporaryDirectory(dir=dest.parent, prefix=f".{engine.name}-") as tmp:
         work = Path(tmp) / "work"
         res, run = engine.run(scene, work, timeout=timeout)
@@ -67,26 +85,68 @@ def generate(case: str, variant: str, engine, scene, *, params: dict | None = No
                                                      date=run.date, wall_time_s=run.wall_time_s))
         meta["files"]["README.md"] = sha256(out / "README.md")
         atomic_json(out / "meta.json", meta)
+        _write_seal(out)
         if dest.exists():
             old = Path(tmp) / "old"
             dest.rename(old)
         out.rename(dest)
-    return dest
 
 
-def verify(path: Path) -> dict:
-    """Check every file of a stored reference against meta.json; return the meta."""
+def _write_seal(path: Path) -> None:
+    """meta.sha256: the sha256 of meta.json, in sha256sum's format, written atomically."""
+    fd, tmp = tempfile.mkstemp(dir=path, suffix=".tmp")
+    os.chmod(tmp, 0o644)
+    with os.fdopen(fd, "w") as fh:
+        fh.write(f"{sha256(path / 'meta.json')}  meta.json\n")
+    os.replace(tmp, path / SEAL)
+
+
+def _verify_files(path: Path) -> dict:
+    """Check every file meta.json lists against its sha256; return the meta."""
     meta_f = path / "meta.json"
     if not meta_f.exists():
         raise EngineError(f"no stored reference at {path}; generate it with `demflow reference ...`")
-    meta = json.loads(meta_f.read_text())
-    for name, digest in meta["files"].items():
+    try:
+        meta = json.loads(meta_f.read_text())
+        files = dict(meta["files"])
+        how = f"demflow reference {meta['case']} --engine {meta['engine']} --variant {meta['variant']}"
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise EngineError(f"stored reference {path} fails its hash check at meta.json (unreadable: {e}); regenerate "
+                          "it with `demflow reference CASE --engine ENGINE --variant VARIANT`") from None
+    for name, digest in files.items():
         f = path / name
         if not f.exists() or sha256(f) != digest:
             raise EngineError(
                 f"stored reference {path} fails its hash check at {name} (edited by hand or corrupt); "
-                f"regenerate it: demflow reference {meta['case']} --engine {meta['engine']} --variant {meta['variant']}")
+                f"regenerate it: {how}")
     return meta
+
+
+def verify(path: Path) -> dict:
+    """Check every file of a stored reference against meta.json, and meta.json against meta.sha256;
+    return the meta."""
+    seal_f = path / SEAL
+    if (path / "meta.json").exists() and not seal_f.exists():
+        raise EngineError(f"stored reference {path} has no {SEAL}, so its meta.json is not covered by a hash (stored "
+                          "before issue 19); seal it, which verifies every other file first: demflow reference CASE "
+                          "--engine ENGINE --variant VARIANT --seal (or regenerate it)")
+    if seal_f.exists():
+        digest = seal_f.read_text().split()[:1]
+        if not (path / "meta.json").exists() or digest != [sha256(path / "meta.json")]:
+            raise EngineError(f"stored reference {path} fails its hash check at meta.json (edited by hand or corrupt; "
+                              f"{SEAL} does not match); regenerate it with `demflow reference`")
+    return _verify_files(path)
+
+
+def seal(path: Path) -> bool:
+    """Write meta.sha256 for a reference stored without it, after every file meta.json lists passes its
+    hash check; True if written, False if the reference was sealed already (and the seal matches)."""
+    if (path / SEAL).exists():
+        verify(path)
+        return False
+    _verify_files(path)
+    _write_seal(path)
+    return True
 
 
 def load(case: str, variant: str, engine: str, base: Path | None = None) -> Results:

@@ -125,19 +125,90 @@ class YadeEngine(Engine):
         return [self.path(), "-n", "-j1", "-x", "deck.py"]
 
     def read(self, scene, sim, outdir: Path):
+        """The result tables of a YADE run in ``outdir`` (``yade_out.json``, written by the deck).  Its
+        structure is checked before use (the keys, the shape of every array, finite numbers, the recorded
+        steps the deck asked for, snapshot steps and body ids in range); anything else raises
+        EngineOutputError naming the file and the entry."""
         f = Path(outdir) / "yade_out.json"
         if not f.exists():
             raise EngineOutputError(f"YADE wrote no output ({f} missing); see {Path(outdir) / 'engine.log'}")
         try:
             out = json.loads(f.read_text())
-        except json.JSONDecodeError as e:
+        except (OSError, ValueError) as e:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
             raise EngineOutputError(f"YADE output {f} is truncated or corrupt ({e}); rerun the engine") from None
-        if not out.get("complete"):
+        if not (isinstance(out, dict) and out.get("complete") is True):
             raise EngineOutputError(f"YADE output {f} is incomplete; rerun the engine")
-        rec = out["rec"]
-        return results_from_records(
-            sim, engine="yade", steps=np.asarray(rec["step"], dtype=np.int64),
-            wall=np.asarray(rec["wall"], dtype=float).reshape(len(rec["step"]), sim.nw, 3),
-            wallpos=np.asarray(rec["wallpos"], dtype=float).reshape(len(rec["step"]), sim.nw, 2),
-            track=np.asarray(rec["track"], dtype=float).reshape(len(rec["step"]), len(sim.track), 2),
-            kinetic=np.asarray(rec["kinetic"], dtype=float), snapshots=out["snapshots"])
+        n, nw, nt = sim.n, sim.nw, len(sim.track)
+        rec = _entry(f, out, "rec", dict)
+        steps = _array(f, "rec.step", _entry(f, rec, "step", list), (-1,))
+        R = steps.shape[0]
+        every = int(scene.outputs.every)
+        want = np.arange(0, int(scene.n_steps), every) if every > 0 else np.zeros(0)
+        if not np.array_equal(steps, want):
+            raise _bad(f, "rec.step", f"records steps {steps[:4].tolist()}... ({R}), the deck records every {every} "
+                                      f"steps from 0 to {int(scene.n_steps) - 1} ({want.shape[0]})")
+        wall = _array(f, "rec.wall", _entry(f, rec, "wall", list), (R, nw, 3))
+        wallpos = _array(f, "rec.wallpos", _entry(f, rec, "wallpos", list), (R, nw, 2))
+        track = _array(f, "rec.track", _entry(f, rec, "track", list), (R, nt, 2))
+        kinetic = _array(f, "rec.kinetic", _entry(f, rec, "kinetic", list), (R,))
+        snaps = []
+        last = -1
+        for q, sn in enumerate(_entry(f, out, "snapshots", list)):
+            where = f"snapshots[{q}]"
+            if not isinstance(sn, dict):
+                raise _bad(f, where, "is not an object")
+            st = _entry(f, sn, "step", int, where)
+            if st not in scene.outputs.snapshots or st <= last:
+                raise _bad(f, f"{where}.step", f"{st!r} is not one of the scene's snapshot steps, in order")
+            last = st
+            parts = _array(f, f"{where}.particles", _entry(f, sn, "particles", list, where), (n, 7))
+            cons = _array(f, f"{where}.contacts", _entry(f, sn, "contacts", list, where), (-1, 9))
+            ids = cons[:, :2]
+            if not (np.all(ids == np.round(ids)) and np.all(ids >= 0) and np.all(cons[:, 0] < n)
+                    and np.all(cons[:, 1] < n + nw)):
+                raise _bad(f, f"{where}.contacts", f"a body id is outside 0..{n - 1} (discs) or {n}..{n + nw - 1} "
+                                                   "(walls)")
+            geo = _array(f, f"{where}.walls", _entry(f, sn, "walls", list, where), (nw, 4))
+            snaps.append(dict(step=st, particles=parts, contacts=cons, walls=geo))
+        return results_from_records(sim, engine="yade", steps=steps.astype(np.int64), wall=wall, wallpos=wallpos,
+                                    track=track, kinetic=kinetic, snapshots=snaps)
+
+
+def _bad(f: Path, where: str, what: str) -> EngineOutputError:
+    return EngineOutputError(f"YADE output {f}: {where} {what}; the output is truncated or corrupt; rerun the engine")
+
+
+def _entry(f: Path, obj: dict, key: str, kind, where: str = ""):
+    """``obj[key]``, of type ``kind`` (an int is never a bool)."""
+    path = f"{where}.{key}" if where else key
+    if key not in obj:
+        raise _bad(f, path, "is missing")
+    v = obj[key]
+    if not isinstance(v, kind) or (kind is int and isinstance(v, bool)):
+        raise _bad(f, path, f"is a {type(v).__name__}, not a {kind.__name__}")
+    return v
+
+
+def _array(f: Path, where: str, v, shape) -> np.ndarray:
+    """``v`` as a float array of ``shape`` (-1: any length) holding finite numbers only."""
+    if any(isinstance(x, (bool, str)) or x is None for x in _leaves(v)):
+        raise _bad(f, where, "holds a value that is not a number")
+    try:
+        a = np.array(v, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise _bad(f, where, "is not a regular array of numbers") from None
+    if a.size == 0 and len(shape) > 1 and shape[0] in (-1, 0):
+        a = a.reshape(0, *shape[1:]) if -1 not in shape[1:] else a
+    if a.ndim != len(shape) or any(s not in (-1, t) for s, t in zip(shape, a.shape)):
+        raise _bad(f, where, f"has shape {a.shape}, expected {tuple('any' if s == -1 else s for s in shape)}")
+    if not np.all(np.isfinite(a)):
+        raise _bad(f, where, "holds a non-finite value")
+    return a
+
+
+def _leaves(v):
+    if isinstance(v, list):
+        for x in v:
+            yield from _leaves(x)
+    else:
+        yield v

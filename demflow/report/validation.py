@@ -174,6 +174,11 @@ def write_report(summary, outdir="reports/validation"):
                 f"<h2>Figures</h2>{figs}"
                 f"</body></html>")
         _atomic_text(outdir / name / "index.html", page)
+    from .robustness import PAGE, render, results_dir, summary_line
+
+    robustness = render(results_dir())  # the fuzz scripts' last run (issue 19), if there is one
+    if robustness:
+        _atomic_text(outdir / PAGE, robustness)
     all_ok = all(c["passed"] for c in summary["cases"].values())
     every = [ch for c in summary["cases"].values() for ch in c["checks"]]
     summary["counts"] = kind_counts(every)
@@ -188,6 +193,7 @@ def write_report(summary, outdir="reports/validation"):
              f"to the very figure checked) and informative lines are never counted as validation.</p>"
              f"<table><tr><th>case</th><th>what</th><th>source</th><th>checks passed</th><th>per kind</th><th></th>"
              f"<th>wall time [s]</th>"
-             f"<th>run at</th></tr>{''.join(rows)}</table>{_not_run(summary)}</body></html>")
+             f"<th>run at</th></tr>{''.join(rows)}</table>{_not_run(summary)}"
+             f"{summary_line(results_dir()) if robustness else ''}</body></html>")
     _atomic_text(outdir / "index.html", index)
     _atomic_text(outdir / "summary.json", json.dumps(_strict(summary), indent=2, default=str, allow_nan=False))
