@@ -224,14 +224,7 @@ def check_scene3d(scene: Scene3D) -> None:
         check_identifier("material", name)
         if not isinstance(m, Material):
             raise SceneError(f"scene.materials[{name!r}]={m!r} is not a Material; give Material(density=...)")
-        _finite(f"scene.materials[{name!r}].density", m.density, nonneg=True)
-        if m.young is not None and m.young != math.inf:  # inf: a rigid body (a plane)
-            _finite(f"scene.materials[{name!r}].young", m.young, positive=True)
-        if m.poisson is not None:
-            nu = _finite(f"scene.materials[{name!r}].poisson", m.poisson)
-            if not -1.0 < nu < 0.5:
-                raise SceneError(f"scene.materials[{name!r}].poisson={nu} is outside (-1, 0.5); give a "
-                                 "Poisson's ratio an isotropic solid can have")
+        m.check(f"scene.materials[{name!r}]")
     for pair, law in scene.laws.items():
         if not (isinstance(pair, tuple) and len(pair) == 2 and all(p in scene.materials for p in pair)):
             raise SceneError(f"scene.laws key {pair!r} is not a pair of declared materials "

@@ -218,6 +218,24 @@ def _(pick):
     return sc, f"scene.materials[{m!r}].density", v
 
 
+@fault("densities", "material Young's modulus")
+def _(pick):
+    v = pick([NAN, -INF, -1.0, 0.0] + NOT_NUMBERS[:2] + NOT_NUMBERS[3:])  # inf is a rigid wall; None: unused
+    sc = pick([base_dry, base_periodic])()
+    m = pick(sorted(sc.materials))
+    sc.materials = dict(sc.materials, **{m: Material(density=sc.materials[m].density, young=v)})
+    return sc, f"scene.materials[{m!r}].young", v
+
+
+@fault("densities", "material Poisson's ratio")
+def _(pick):
+    v = pick(NON_FINITE + [0.5, 0.7, -1.0, -2.0] + NOT_NUMBERS[:2] + NOT_NUMBERS[3:])
+    sc = pick([base_dry, base_periodic])()
+    m = pick(sorted(sc.materials))
+    sc.materials = dict(sc.materials, **{m: Material(density=sc.materials[m].density, young=1e9, poisson=v)})
+    return sc, f"scene.materials[{m!r}].poisson", v
+
+
 @fault("densities", "disc material with zero density")
 def _(pick):
     sc = base_dry()

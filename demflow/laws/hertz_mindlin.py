@@ -86,21 +86,21 @@ class HertzMindlinLaw:
             if v is None and key == "restitution_tangential":
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise SceneError(f"law {pair}: {key}={v!r} is not a finite number; give a float")
+                raise SceneError(f"scene.laws[{pair!r}].{key}={v!r} is not a finite number; give a float")
             if v < 0:
-                raise SceneError(f"law {pair}: {key}={v} is negative; give {key} >= 0")
+                raise SceneError(f"scene.laws[{pair!r}].{key}={v} is negative; give {key} >= 0")
         for key in ("restitution", "restitution_tangential"):
             v = getattr(self, key)
             if v is not None and not (0.0 < v <= 1.0):
-                raise SceneError(f"law {pair}: {key}={v} is outside (0, 1]; a Hertz dashpot reaches "
+                raise SceneError(f"scene.laws[{pair!r}].{key}={v} is outside (0, 1]; a Hertz dashpot reaches "
                                  "any e > 0: give 0 < e <= 1")
         for key, allowed in (("damping", CONVENTIONS[:3]), ("tangential", tuple(_TANGENTIAL)),
                              ("shear_spring", tuple(_SHEAR)), ("friction_cap", tuple(_CAP))):
             v = getattr(self, key)
             if v not in allowed:
-                raise SceneError(f"law {pair}: {key}={v!r} is not one of {allowed}")
+                raise SceneError(f"scene.laws[{pair!r}].{key}={v!r} is not one of {allowed}")
         if self.tangential == "mindlin-deresiewicz" and self.shear_spring != "incremental":
-            raise SceneError(f"law {pair}: tangential='mindlin-deresiewicz' is incremental by nature; "
+            raise SceneError(f"scene.laws[{pair!r}].tangential='mindlin-deresiewicz' is incremental by nature; "
                              "give shear_spring='incremental'")
 
 
