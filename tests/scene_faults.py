@@ -220,7 +220,7 @@ def _(pick):
 
 @fault("densities", "material Young's modulus")
 def _(pick):
-    v = pick([NAN, -INF, -1.0, 0.0] + NOT_NUMBERS[:2] + NOT_NUMBERS[3:])  # inf is a rigid wall; None: unused
+    v = pick([NAN, -INF, -1.0, 0.0] + [x for x in NOT_NUMBERS if x is not None])  # inf: a rigid wall; None: unused
     sc = pick([base_dry, base_periodic])()
     m = pick(sorted(sc.materials))
     sc.materials = dict(sc.materials, **{m: Material(density=sc.materials[m].density, young=v)})
@@ -229,7 +229,7 @@ def _(pick):
 
 @fault("densities", "material Poisson's ratio")
 def _(pick):
-    v = pick(NON_FINITE + [0.5, 0.7, -1.0, -2.0] + NOT_NUMBERS[:2] + NOT_NUMBERS[3:])
+    v = pick(NON_FINITE + [0.5, 0.7, -1.0, -2.0] + [x for x in NOT_NUMBERS if x is not None])
     sc = pick([base_dry, base_periodic])()
     m = pick(sorted(sc.materials))
     sc.materials = dict(sc.materials, **{m: Material(density=sc.materials[m].density, young=1e9, poisson=v)})
@@ -607,6 +607,8 @@ def _(pick):
 def _(pick):
     key = pick(["viscosity", "density", "element_length", "min_gap", "safety"])
     v = pick(BAD_POSITIVE if key != "density" else BAD_NONNEG)
+    if v is None and key in ("element_length", "min_gap"):  # None is these fields' default (derived)
+        v = -1.0
     if key == "safety":
         v = pick([v, 1.5, 2.0])
     sc = base_fluid()
