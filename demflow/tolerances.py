@@ -159,6 +159,26 @@ TOLERANCES = {
         1e-4,
         "Acceptance of issue 13: the stack's total energy conserved to 1e-4 over the run (relative to the initial "
         "554.74 J), largest deviation over 10 s.", absolute=True, kind="exact"),
+    "engines3d.round-off": Tolerance(
+        1e-10,
+        "3D engine conformance (conformance-3d): same model, same Δt, the same operations up to floating-point "
+        "order. Trajectory difference = max(|Δx|/R, |Δv|/V, |Δω|R/V, |ΔF_plane|/F_max) over every recorded step; "
+        "measured MEASURED_ROUNDOFF. The smallest named model difference measured on these scenes (the history "
+        "rotation, periodic pair) is MEASURED_ROTATION, the shear-spring modes differ by MEASURED_SPRING: 1e-11 "
+        "passes round-off only.", absolute=True, kind="cross-code"),
+    "engines3d.history-rotation": Tolerance(
+        2e-9,
+        "Where the contact normal turns (the periodic pair, 1.4e-3 rad over 52 steps) the engines carry the "
+        "tangential history into the new tangent plane by other rules than demflow (YADE rotates it by "
+        "T × (n_old × n), LIGGGHTS projects after the increment, demflow projects and rescales before it): an "
+        "O(θ²) difference per step, θ the normal's turn per step, measured MEASURED_ROTATION at Δt and half that "
+        "at Δt/2 (the first-order check). 2e-9 bounds it at the stored Δt with margin; a model difference (the "
+        "shear-spring modes, MEASURED_SPRING on this scene) fails it.", absolute=True, kind="cross-code"),
+    "engines3d.first-order": Tolerance(
+        0.1,
+        "A difference that is O(θ²) per step with θ ∝ Δt sums to O(Δt) over a contact: halving Δt halves it "
+        "(ratio 0.5). ±0.1 separates first order from a Δt-independent model difference (ratio 1) and from "
+        "second order (0.25); measured MEASURED_RATIO.", absolute=True, kind="cross-code"),
 }
 
 

@@ -19,6 +19,7 @@ from .thesis_simple_shear import SimpleShear
 from .thesis_simple_shear_study import SimpleShearStudy
 from .hertz_impacts import HertzImpacts
 from .ch3_stack import ElasticStack
+from .conformance_3d import Conformance3D
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
@@ -29,6 +30,7 @@ CASES[SimpleShear.name] = SimpleShear()
 CASES[SimpleShearStudy.name] = SimpleShearStudy()
 CASES[HertzImpacts.name] = HertzImpacts()
 CASES[ElasticStack.name] = ElasticStack()
+CASES[Conformance3D.name] = Conformance3D()
 
 
 def get_case(name: str) -> Case:

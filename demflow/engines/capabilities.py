@@ -39,6 +39,8 @@ class Expression:
     construct: str
     verdict: str
     note: str = ""
+    uses: Callable | None = None  # this engine's own test of a scene (else the feature's ``uses``)
+    remedy: str = ""  # this engine's own remedy (else the feature's)
 
 
 @dataclass(frozen=True)
@@ -172,25 +174,26 @@ def feature(key: str) -> Feature:
     raise KeyError(f"no feature {key!r} in the capabilities table; known: {', '.join(f.key for f in FEATURES)}")
 
 
-def refuse_inexpressible(engine: str, scene) -> None:
+def refuse_inexpressible(engine: str, scene, features: tuple[Feature, ...] | None = None) -> None:
     """Raise EngineUnsupported if ``scene`` uses a feature ``engine`` ('yade' or 'liggghts') cannot
     express, or leaves the matching mode it needs; the message names the feature, the engine, what
     the engine does instead and what to do.  Value-dependent limits (``exact`` with a condition)
     are checked by the deck writers themselves."""
     name = ENGINE_NAMES[engine]
-    for f in FEATURES:
+    for f in FEATURES if features is None else features:
         e = f.expression(engine)
-        if f.uses is None or e.verdict not in (CANNOT, MATCHING) or not f.uses(scene):
+        uses = e.uses or f.uses
+        if uses is None or e.verdict not in (CANNOT, MATCHING) or not uses(scene):
             continue
         what = "cannot express" if e.verdict == CANNOT else "expresses only demflow's matching mode of"
         raise EngineUnsupported(
             f"{name} {what} {f.item} (capabilities table, feature {f.key!r}): scene {scene.name!r} uses "
-            f"{f.demflow}; {name} has {e.construct}. To run it in {name}: {f.remedy}")
+            f"{f.demflow}; {name} has {e.construct}. To run it in {name}: {e.remedy or f.remedy}")
 
 
-def as_html() -> str:
-    """The model-equivalence page's table: one row per feature, each engine's construct with its
-    verdict and condition or measured consequence."""
+def as_html(features: tuple[Feature, ...] | None = None) -> str:
+    """The model-equivalence page's table: one row per feature (default :data:`FEATURES`, the 2D
+    rows), each engine's construct with its verdict and condition or measured consequence."""
     cols = ["feature", "demflow", "YADE", "YADE verdict", "LIGGGHTS", "LIGGGHTS verdict", "measured"]
     head = "".join(f"<th>{c}</th>" for c in cols)
 
@@ -200,5 +203,157 @@ def as_html() -> str:
     rows = "".join(
         "<tr>" + "".join(f"<td>{html.escape(v)}</td>" for v in (
             f.item, f.demflow, f.yade.construct, verdict(f.yade), f.liggghts.construct, verdict(f.liggghts),
-            f.measured)) + "</tr>" for f in FEATURES)
+            f.measured)) + "</tr>" for f in (FEATURES if features is None else features))
     return f"<table><tr>{head}</tr>{rows}</table>"
+
+
+# ------------------------------------------------------------------------------------------ 3D spheres
+# The rows of the 3D harness (demflow.engines.yade3d, liggghts3d): Scene3D with the Hertz-Mindlin law.
+# Measured on the conformance-3d case (reference_runs/conformance-3d, tests/test_conformance3d.py).
+def _laws3d(scene):
+    return list(scene.laws.values())
+
+
+def _hertz(law) -> bool:
+    from ..laws.hertz_mindlin import HertzMindlinLaw
+
+    return isinstance(law, HertzMindlinLaw)
+
+
+def _tangential(law) -> bool:
+    return _hertz(law) and law.tangential != "none" and law.friction > 0
+
+
+def _linear_3d(scene) -> bool:
+    return any(not _hertz(law) for law in _laws3d(scene))
+
+
+def _not_incremental(scene) -> bool:
+    return any(_tangential(law) and law.shear_spring != "incremental" for law in _laws3d(scene))
+
+
+def _not_total(scene) -> bool:
+    return any(_tangential(law) and law.shear_spring != "total" for law in _laws3d(scene))
+
+
+def _md(scene) -> bool:
+    return any(_tangential(law) and law.tangential == "mindlin-deresiewicz" for law in _laws3d(scene))
+
+
+def _elastic_cap(scene) -> bool:
+    return any(_tangential(law) and law.friction_cap != "total" for law in _laws3d(scene))
+
+
+def _global_damping_3d(scene) -> bool:
+    d = scene.damping
+    return d.C > 0 or d.C_rot > 0 or d.alpha > 0
+
+
+def _local_damping(scene) -> bool:
+    return scene.local_damping > 0
+
+
+def _servo_3d(scene) -> bool:
+    return any(p.servo is not None for p in scene.planes)
+
+
+def _fixed(scene) -> bool:
+    return scene.spheres.fixed is not None and any(bool(f) for f in scene.spheres.fixed)
+
+
+FEATURES_3D: tuple[Feature, ...] = (
+    Feature("law-3d", "contact law (3D)", "Hertz-Mindlin (HertzMindlinLaw) or the linear law",
+            yade=Expression("FrictMat + Ip2_FrictMat_FrictMat_MindlinPhys + Law2_ScGeom_MindlinPhys_Mindlin", EXACT,
+                            "Hertz-Mindlin only; the linear law is not in the 3D deck"),
+            liggghts=Expression("pair_style gran model hertz tangential history limitForce on", EXACT,
+                                "Hertz-Mindlin only; the linear law is not in the 3D deck"),
+            measured="see the conformance rows", uses=_linear_3d,
+            remedy="give every material pair a HertzMindlinLaw (the 3D decks express the Hertz-Mindlin law only)"),
+    Feature("shear-spring-3d", "Mindlin shear spring (3D)",
+            "`shear_spring='incremental'`: T += −k_t v_t Δt (k_t = 8G*a now); `'total'`: u += v_t Δt, T = −k_t u",
+            yade=Expression("shearElastic −= ks·v_s Δt (incremental)", MATCHING, uses=_not_incremental,
+                            remedy="run the scene with HertzMindlinLaw(shear_spring='incremental'), YADE's matching "
+                                   "mode"),
+            liggghts=Expression("tangential history: shear += v_t Δt, F_t = −k_t·shear (total)", MATCHING,
+                                uses=_not_total,
+                                remedy="run the scene with HertzMindlinLaw(shear_spring='total'), LIGGGHTS's "
+                                       "matching mode"),
+            measured="PENDING"),
+    Feature("mindlin-deresiewicz", "Mindlin-Deresiewicz tangential law", "tangential='mindlin-deresiewicz' "
+            "(ch3 eqs 3.24-3.25: loading/unloading/reloading stiffness)",
+            yade=Expression("Law2_ScGeom_MindlinPhys_Mindlin is the no-slip stiffness only", CANNOT),
+            liggghts=Expression("tangential history is the no-slip stiffness only", CANNOT), uses=_md,
+            remedy="run the scene with tangential='mindlin' (both engines' law)"),
+    Feature("friction-cap-3d", "Coulomb cap (3D)", "|T| ≤ μ·Fn with Fn total (`friction_cap='total'`) or its "
+            "elastic part (`'elastic'`)",
+            yade=Expression("maxFs = |normalForce| tan φ, normalForce with the dashpot", MATCHING),
+            liggghts=Expression("Ft_friction = μ|Fn|, Fn with the dashpot", MATCHING),
+            measured="PENDING", uses=_elastic_cap,
+            remedy="run the scene with HertzMindlinLaw(friction_cap='total'), both engines' rule"),
+    Feature("damping-3d", "normal and tangential dashpots (3D)",
+            "c = 2ζ√(m* k) with the tangent stiffness; ζ from e by a convention ('exact', 'yade', 'liggghts')",
+            yade=Expression("betan = ζ_n, betas = ζ_t per material pair (Cn_crit·betan)", EXACT,
+                            "any convention: the deck passes demflow's ζ"),
+            liggghts=Expression("coefficientRestitution e' with √(5/6)|ln e'|/√(ln²e' + π²) = ζ_n", EXACT,
+                                "ζ_n < √(5/6) and ζ_t = ζ_n (or ζ_t = 0: tangential_damping off); other values "
+                                "are refused"),
+            measured="PENDING"),
+    Feature("shear-damping-ratio", "tangential dashpot vs normal dashpot",
+            "ζ_t from restitution_tangential (None: ζ_t = ζ_n)",
+            yade=Expression("betas free per pair (es or betas)", EXACT),
+            liggghts=Expression("γ_t/γ_n = √(S_t/S_n) with one β (ζ_t = ζ_n), or 0", EXACT,
+                                "ζ_t ∈ {ζ_n, 0}; other values refused"),
+            measured="PENDING"),
+    Feature("dashpot-mass-3d", "dashpot mass", "m* = m_i m_j/(m_i + m_j) of the spheres (plane: m_i)",
+            yade=Expression("m̄ of the two bodies' state.mass (a clump member's own mass)", EXACT,
+                            "for spheres the member is the body: they coincide"),
+            liggghts=Expression("meff of the two atoms (multisphere: the body mass)", EXACT,
+                                "for spheres they coincide"),
+            measured="PENDING"),
+    Feature("walls-3d", "planes (3D)", "infinite planes, contact R* = R, prescribed translation",
+            yade=Expression("Box bodies with a compensating material (box-sphere R* = R/2 otherwise) moved by "
+                            "their velocity set before the InteractionLoop", EXACT,
+                            "one sphere material per plane (else refused)"),
+            liggghts=Expression("one-triangle STL mesh per plane in one fix wall/gran (reff = R), "
+                                "fix move/mesh linear/variable", EXACT),
+            measured="PENDING"),
+    Feature("r2-wall", "YADE's own box-sphere radius", "R* = R against a plane",
+            yade=Expression("refR1 = refR2 = R: R* = R/2, kno and kso 1/√2 of the flat-wall Hertz values", DIFFERS,
+                            "compensated in the deck (walls-3d); uncompensated: PENDING"),
+            liggghts=Expression("reff = radius for walls", EXACT),
+            measured="PENDING"),
+    Feature("unlike-materials-3d", "unlike sphere materials with friction", "G* = 1/((2−ν₁)/G₁ + (2−ν₂)/G₂)",
+            yade=Expression("kso from the mean G and ν of the two materials", DIFFERS,
+                            "equal for like materials; unlike frictional pairs are refused by the deck writer"),
+            liggghts=Expression("Geff = 1/(2(2−ν₁)(1+ν₁)/E₁ + 2(2−ν₂)(1+ν₂)/E₂)", EXACT)),
+    Feature("history-rotation", "tangential history when the contact normal turns",
+            "projected onto the new tangent plane and rescaled to its length, before the increment",
+            yade=Expression("ScGeom::rotate: T −= T × (n_old × n) and the twist about n", DIFFERS, "PENDING"),
+            liggghts=Expression("shear += v_t Δt, then projected onto the tangent plane (no rescale)", DIFFERS,
+                                "PENDING"),
+            measured="PENDING"),
+    Feature("initial-velocity-3d", "initial velocity (3D)", "v(−Δt/2)",
+            yade=Expression("v(−Δt/2)", EXACT),
+            liggghts=Expression("v(0): the deck gives v(−Δt/2) + gΔt/2", EXACT,
+                                "when no contact acts at t = 0 (else off by F_c(0)Δt/2m in the first half step)")),
+    Feature("periodic-3d", "periodic box (3D)", "periodic along x and/or y, minimum image",
+            yade=Expression("periodic cell along x, y and z (z period 1000× the scene)", EXACT,
+                            "periodic along both x and y (else refused)"),
+            liggghts=Expression("boundary p p f (or p f f, f p f)", EXACT),
+            measured="PENDING"),
+    Feature("global-damping-3d", "mass-proportional damping (3D)", "C = αm, C* = αI (ch3 eq 3.19)",
+            yade=Expression("not in the 3D deck", CANNOT), liggghts=Expression("not in the 3D deck", CANNOT),
+            uses=_global_damping_3d, remedy="run the scene with GlobalDamping() (no mass-proportional damping)"),
+    Feature("local-damping-3d", "local non-viscous damping", "Cundall's α_l on each force component (Miyata eq 33)",
+            yade=Expression("NewtonIntegrator(damping=α_l), gravity damped too", CANNOT, uses=_local_damping,
+                            remedy="run the scene with local_damping=0"),
+            liggghts=Expression("no local damping in LIGGGHTS", CANNOT, uses=_local_damping,
+                                remedy="run the scene with local_damping=0"),
+            uses=_local_damping, remedy="run the scene with local_damping=0"),
+    Feature("servo-plates", "servo plates", "PlateServo (thesis eqs 5.11-5.12 in 3D)",
+            yade=Expression("not in the 3D deck", CANNOT), liggghts=Expression("not in the 3D deck", CANNOT),
+            uses=_servo_3d, remedy="replace the servo by prescribed PlanePhase motion"),
+    Feature("fixed-spheres", "fixed spheres", "Spheres(fixed=...): not integrated, moving with their velocity",
+            yade=Expression("not in the 3D deck", CANNOT), liggghts=Expression("not in the 3D deck", CANNOT),
+            uses=_fixed, remedy="make every sphere free (Spheres(fixed=None))"),
+)
