@@ -64,7 +64,7 @@ def scene3d_numbers(scene, sim) -> dict:
     if not isinstance(law, HertzParams):
         raise EngineUnsupported(
             f"scene {scene.name!r} uses the linear law in 3D; the 3D engine decks express the Hertz-Mindlin law "
-            "only (capabilities feature 'law-3d'): give every pair a HertzMindlinLaw")
+            "only (capabilities feature 'linear-law-3d'): give every pair a HertzMindlinLaw")
     sp = sim.spheres
     mats = [names[int(m)] for m in sp.mat]
     used = sorted(set(mats), key=names.index)

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..scene import check_identifier
 from .base import Engine, EngineOutputError, EngineUnsupported, atomic_json
 from .base3d import scene3d_numbers, touching_at_start, trajectory_from_arrays
 from .capabilities import FEATURES_3D, refuse_inexpressible
@@ -103,6 +104,7 @@ class Liggghts3DEngine(Engine):
         return LiggghtsEngine().version()
 
     def write_deck(self, scene, sim, deckdir: Path):
+        check_identifier("scene", scene.name)  # before any message or file names it
         refuse_inexpressible(self.name, scene, FEATURES_3D)
         S = scene3d_numbers(scene, sim)
         M = S["materials"]

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..scene import check_identifier
 from .base import Engine, EngineUnsupported, atomic_json
 from .base3d import read_json_output, scene3d_numbers, trajectory_from_arrays
 from .capabilities import FEATURES_3D, refuse_inexpressible
@@ -86,6 +87,7 @@ class Yade3DEngine(Engine):
         return YadeEngine().version()
 
     def write_deck(self, scene, sim, deckdir: Path):
+        check_identifier("scene", scene.name)  # before any message or file names it
         refuse_inexpressible(self.name, scene, FEATURES_3D)
         S = scene3d_numbers(scene, sim)
         M = S["materials"]
