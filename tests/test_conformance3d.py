@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 import reference_contact as rc
+from helpers import json_leaves
 from demflow import GlobalDamping, LinearLaw, PlateServo, SceneError, build
 from demflow.cases.conformance_3d import (CASE, CONFORMANCE, LIFT_STEP, PARAMS, VARIANTS, conformance_tolerance,
                                          engine_for, scene)
@@ -307,17 +308,7 @@ def test_yade_deck_is_the_fixed_program_and_data_is_numbers(tmp_path):
     assert (tmp_path / "deck.py").read_text() == resources.files("demflow.engines.decks").joinpath(
         "yade_spheres3d.py").read_text()
 
-    def leaves(o):
-        if isinstance(o, dict):
-            for v in o.values():
-                yield from leaves(v)
-        elif isinstance(o, list):
-            for v in o:
-                yield from leaves(v)
-        else:
-            yield o
-
-    for v in leaves(json.loads((tmp_path / "scene.json").read_text())):
+    for v in json_leaves(json.loads((tmp_path / "scene.json").read_text())):
         assert v is None or isinstance(v, (int, float, bool)) or re.fullmatch(r"[A-Za-z][A-Za-z0-9_\-|]*", v), v
 
 

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +28,8 @@ import numpy as np
 import pandas as pd
 
 from ..scene import SceneError, check_identifier
-from .base import Engine, EngineRun, EngineUnsupported
+from . import DemflowEngine
+from .base import EngineRun, EngineUnsupported
 
 SPHERE_COLUMNS = ("step", "id", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz")
 PLANE_COLUMNS = ("step", "plane", "fx", "fy", "fz")
@@ -270,21 +270,8 @@ def trajectory_difference(ref: Trajectory3D, other: Trajectory3D, until: int | N
     return out
 
 
-class Demflow3DEngine(Engine):
-    """demflow itself on a 3D scene, behind the engines' interface (no subprocess)."""
-
-    name = "demflow"
-
-    def path(self):
-        return "demflow"
-
-    def available(self):
-        return True
-
-    def version(self):
-        from .. import __version__
-
-        return __version__
+class Demflow3DEngine(DemflowEngine):
+    """demflow itself on a 3D scene, behind the engines' interface (no subprocess): the trajectory tables."""
 
     def run(self, scene, workdir=None, *, timeout=None, sim=None):
         from ..build import build
@@ -310,6 +297,3 @@ def read_json_output(path: Path, engine: str) -> dict:
         raise EngineOutputError(f"{engine} output {path} is incomplete; rerun the engine")
     return out
 
-
-def env_one_thread() -> dict:
-    return dict(os.environ, OMP_NUM_THREADS="1")

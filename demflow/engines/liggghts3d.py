@@ -32,9 +32,10 @@ from pathlib import Path
 import numpy as np
 
 from ..scene import check_identifier
-from .base import Engine, EngineOutputError, EngineUnsupported, atomic_json
+from .base import EngineOutputError, EngineUnsupported, atomic_json
 from .base3d import scene3d_numbers, touching_at_start, trajectory_from_arrays
 from .capabilities import FEATURES_3D, refuse_inexpressible
+from .liggghts import LiggghtsEngine, _read_local  # _read_local: the 2D reader's LAMMPS dump parser
 
 RIGID_MODULUS = 1e300  # a rigid plane's Young's modulus in LIGGGHTS (compliance (1 − ν²)/E ≈ 1e-300)
 ZETA_MAX = math.sqrt(5.0 / 6.0)  # LIGGGHTS's ζ = √(5/6)|β| < √(5/6) for any 0 < e ≤ 1
@@ -91,17 +92,9 @@ def _stl(path: Path, point, normal, half: float):
     return np.array(verts)
 
 
-class Liggghts3DEngine(Engine):
-    """LIGGGHTS on a :class:`~demflow.scene3d.Scene3D` (module docstring)."""
-
-    name = "liggghts"
-    executable = "liggghts"
-    package = "liggghts"
-
-    def version(self) -> str:
-        from .liggghts import LiggghtsEngine
-
-        return LiggghtsEngine().version()
+class Liggghts3DEngine(LiggghtsEngine):
+    """LIGGGHTS on a :class:`~demflow.scene3d.Scene3D` (module docstring); the executable, version and
+    command line are the 2D engine's."""
 
     def write_deck(self, scene, sim, deckdir: Path):
         check_identifier("scene", scene.name)  # before any message or file names it
@@ -253,9 +246,6 @@ class Liggghts3DEngine(Engine):
         atomic_json(deckdir / "scene.json", S)
         return [deck, deckdir / "scene.json"] + [deckdir / f"w{k}.stl" for k in range(len(meshes))]
 
-    def command(self, deckdir: Path):
-        return ["stdbuf", "-o0", "-e0", self.path(), "-in", "deck.in", "-log", "log.liggghts", "-echo", "none"]
-
     def read(self, scene, sim, outdir: Path):
         import json
 
@@ -266,7 +256,7 @@ class Liggghts3DEngine(Engine):
                                     "the output is truncated; rerun the engine")
         S = json.loads((outdir / "scene.json").read_text())
         try:
-            dumps = _read_dump(outdir / "spheres.txt", 21)
+            dumps = _read_local(outdir / "spheres.txt", 21, atoms=True)
             planes = np.loadtxt(outdir / "planes.txt", ndmin=2) if sim.n_planes else np.zeros((0, 1))
         except (OSError, ValueError) as e:
             raise EngineOutputError(f"LIGGGHTS output in {outdir} is missing or truncated ({e}); rerun the engine") from None
@@ -298,28 +288,6 @@ class Liggghts3DEngine(Engine):
         res = trajectory_from_arrays(sim, "liggghts", steps, rows, p_steps, p_rows)
         res.meta.update(touching_at_start=S["liggghts"]["touching_at_start"])
         return res
-
-
-def _read_dump(path: Path, ncol: int) -> dict:
-    """{timestep: array (atoms, ncol)} of a LAMMPS custom dump."""
-    out = {}
-    lines = Path(path).read_text().splitlines()
-    k = 0
-    while k < len(lines):
-        if lines[k].startswith("ITEM: TIMESTEP"):
-            step = int(lines[k + 1])
-            count = int(lines[k + 3])
-            k += 4
-            while not lines[k].startswith("ITEM: ATOMS"):
-                k += 1
-            rows = [list(map(float, ln.split())) for ln in lines[k + 1:k + 1 + count]]
-            if len(rows) != count or any(len(r) != ncol for r in rows):
-                raise ValueError(f"{path.name}: step {step} has {len(rows)} of {count} rows")
-            out[step] = np.array(rows).reshape(count, ncol)
-            k += 1 + count
-        else:
-            k += 1
-    return out
 
 
 __all__ = ["Liggghts3DEngine", "restitution_for_zeta"]

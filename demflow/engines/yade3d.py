@@ -20,16 +20,16 @@ through it what YADE cannot express):
 from __future__ import annotations
 
 import math
-import subprocess
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from ..scene import check_identifier
-from .base import Engine, EngineUnsupported, atomic_json
+from .base import EngineUnsupported, atomic_json
 from .base3d import read_json_output, scene3d_numbers, trajectory_from_arrays
 from .capabilities import FEATURES_3D, refuse_inexpressible
+from .yade import YadeEngine
 
 
 def yade_moduli(Ea, nua, Eb, nub) -> tuple[float, float]:
@@ -69,22 +69,16 @@ def sphere_pair_stiffness(p, m) -> None:
                                 f"{p['Estar']}, {p['Gstar']}")
 
 
-class Yade3DEngine(Engine):
-    """YADE on a :class:`~demflow.scene3d.Scene3D` (module docstring)."""
+class Yade3DEngine(YadeEngine):
+    """YADE on a :class:`~demflow.scene3d.Scene3D` (module docstring); the executable, version and command
+    line are the 2D engine's.  ``compensate_walls=False`` writes YADE's own box (R* = R/2) and
+    ``avoid_ratcheting=True`` YADE's default sphere-sphere geometry: both only to measure them."""
 
-    name = "yade"
-    executable = "yade"
-    package = "yade"
     deck = "yade_spheres3d.py"
 
     def __init__(self, compensate_walls: bool = True, avoid_ratcheting: bool = False):
         self.compensate_walls = compensate_walls
         self.avoid_ratcheting = avoid_ratcheting
-
-    def version(self) -> str:
-        from .yade import YadeEngine
-
-        return YadeEngine().version()
 
     def write_deck(self, scene, sim, deckdir: Path):
         check_identifier("scene", scene.name)  # before any message or file names it
@@ -146,9 +140,6 @@ class Yade3DEngine(Engine):
         deck = deckdir / "deck.py"
         deck.write_text(resources.files("demflow.engines.decks").joinpath(self.deck).read_text())
         return [deck, deckdir / "scene.json"]
-
-    def command(self, deckdir: Path):
-        return [self.path(), "-n", "-j1", "-x", "deck.py"]
 
     def read(self, scene, sim, outdir: Path):
         out = read_json_output(Path(outdir) / "yade_out.json", "YADE")
