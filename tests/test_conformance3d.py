@@ -261,6 +261,12 @@ def test_initial_velocity_convention(tmp_path):
     assert vz == 0.5 * sim.dt * -9.81
     shifted = dataclasses.replace(sc, spheres=dataclasses.replace(sc.spheres, velocity=[[0.0, 0.0, vz]]))
     _measured("initial-velocity-3d", _size(demflow_run("moving-plate-total"), demflow_trajectory(build(shifted))))
+    # a sphere resting in contact at t = 0: the contact force is not known before LIGGGHTS's setup, so the deck
+    # gives v(-Δt/2) unchanged and records that the convention differs (capabilities 'initial-velocity-3d')
+    resting = dataclasses.replace(sc, spheres=dataclasses.replace(sc.spheres, z=[0.999 * sc.spheres.radius[0]]))
+    Liggghts3DEngine().write_deck(resting, build(resting), tmp_path)
+    assert float(re.search(r"set atom 1 .* vz (\S+)", (tmp_path / "deck.in").read_text()).group(1)) == 0.0
+    assert json.loads((tmp_path / "scene.json").read_text())["liggghts"]["touching_at_start"] is True
     assert _size(demflow_run("moving-plate-total"), stored("moving-plate-total", "liggghts")) <= ROUND_OFF
 
 

@@ -118,23 +118,13 @@ def scene3d_numbers(scene, sim) -> dict:
 
 
 def touching_at_start(sim) -> bool:
-    """Whether any contact carries force at t = 0 (then v(0) and v(-Δt/2) differ by that force)."""
-    sp = sim.spheres
-    pos, r = sp.pos, sp.r
-    n = len(r)
-    for i in range(n):
-        for j in range(i + 1, n):
-            d = pos[j] - pos[i]
-            if sim.box.periodic_x:
-                d[0] -= sim.box.lx * math.floor(d[0] / sim.box.lx + 0.5)
-            if sim.box.periodic_y:
-                d[1] -= sim.box.ly * math.floor(d[1] / sim.box.ly + 0.5)
-            if np.linalg.norm(d) < r[i] + r[j]:
-                return True
-        for q in range(sim.planes.point.shape[0]):
-            if (pos[i] - sim.planes.point[q]) @ sim.planes.normal[q] < r[i]:
-                return True
-    return False
+    """Whether any contact carries force at t = 0 (then v(0) and v(-Δt/2) differ by that force):
+    the pairs the neighbour search lists with no skin (centres closer than r_i + r_j, or a plane
+    closer than r)."""
+    from ..contacts.spheres import sphere_pairs
+
+    i, _, _ = sphere_pairs(sim.spheres.pos, sim.spheres.r, 0.0, sim.box, sim.planes.point, sim.planes.normal)
+    return bool(i.size)
 
 
 @dataclass
