@@ -357,7 +357,8 @@ FEATURES_3D: tuple[Feature, ...] = (
             "the contact at step n sees the plane's velocity of step n (the one that moves it to step n + 1)",
             yade=Expression("box velocity set before the InteractionLoop of each step", EXACT),
             liggghts=Expression("the mesh contact sees the velocity that moved the mesh into place; the deck switches "
-                                "in-plane components one step early (exact: no contact depends on them)", DIFFERS,
+                                "the in-plane part of the velocity one step early (exact: a plane's own in-plane "
+                                "displacement changes no contact)", DIFFERS,
                                 "a normal velocity switch during contact is seen one step late"),
             measured=f"normal velocity 0 → 0.3 m/s during contact: {_M['plane-velocity-timing']:.3g} (LIGGGHTS, "
                      "oblique-plane-lift); in-plane switches: round-off (moving-plate-phases)"),

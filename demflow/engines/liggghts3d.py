@@ -205,19 +205,20 @@ class Liggghts3DEngine(LiggghtsEngine):
                 continue
             s0 = 0
             terms = [[], [], []]
+            nrm = pl["normal"]
             for ph in pl["phases"]:
                 s1 = s0 + ph["cycles"]
+                vn = sum(ph["v"][a] * nrm[a] for a in range(3))
                 for a in range(3):
-                    if not ph["v"][a]:
-                        continue
                     # LIGGGHTS's step n moves the mesh by the velocity its contacts see at step n; demflow moves
                     # the plane after its step n-1 force pass by the velocity of step n-1 and uses the velocity
-                    # of step n in the step n force pass.  Along the normal the position must follow demflow's
-                    # steps (step >= s0+1: the contact velocity is then one step late at a switch); along an
-                    # axis in the plane the position does not matter, so the velocity follows demflow's steps.
-                    shift = 0 if pl["normal"][a] == 0.0 else 1
-                    cond = f"(step>={s0 + shift})*(step<={s1 - 1 + shift})"
-                    terms[a].append(f"{cond}*{_f(ph['v'][a])}")
+                    # of step n in the step n force pass.  The normal part must put the plane where demflow has
+                    # it (steps s0+1..s1: the contact sees a switch one step late); the part in the plane moves
+                    # nothing a contact sees, so it follows demflow's velocity (steps s0..s1-1).  Both parts are
+                    # exact for an axis-aligned plane (vn·n_a is v_a or 0).
+                    for part, shift in ((vn * nrm[a], 1), (ph["v"][a] - vn * nrm[a], 0)):
+                        if part:
+                            terms[a].append(f"(step>={s0 + shift})*(step<={s1 - 1 + shift})*{_f(part)}")
                 s0 = s1
             for a, c in enumerate("xyz"):
                 L.append(f"variable w{k}v{c} equal {'+'.join(terms[a]) or '0.0'}")
