@@ -97,8 +97,8 @@ def main(argv=None):
         if bad:
             print(f"demflow: {args.engine} cannot run variant(s) {bad}; it runs {can}", file=sys.stderr)
             return 2
-        engine = get_engine(args.engine)
         for v in variants:
+            engine = plan.engine(args.engine, v) if plan.engine else get_engine(args.engine)
             try:
                 path = reference.generate(plan.store, v, engine, plan.scene(v, plan.params), params=plan.params,
                                           timeout=args.timeout)

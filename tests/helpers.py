@@ -26,3 +26,15 @@ def gas_scene(x, y, r, v, om=None, *, ks=0.0, mu=0.0, cn=0.0, dt=None, n_steps=2
                  laws={("g", "g"): law, ("g", "wall"): law}, walls=list(walls),
                  contact_model=ContactModel(normal=normal), dt=dt, n_steps=n_steps,
                  outputs=Outputs(every=every, snapshots=tuple(snapshots)))
+
+
+def json_leaves(o):
+    """Every leaf value of a JSON document (dicts and lists walked), for checking what a deck's data holds."""
+    if isinstance(o, dict):
+        for v in o.values():
+            yield from json_leaves(v)
+    elif isinstance(o, list):
+        for v in o:
+            yield from json_leaves(v)
+    else:
+        yield o

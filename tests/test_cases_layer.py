@@ -156,8 +156,10 @@ def test_report_counts_info_apart(tmp_path):
 
 # -- hooks and the typed return
 def test_reference_and_compare_choices_come_from_the_registry():
-    assert set(reference_cases()) == {"cs-nine-disc", "cs-photoelastic"}
-    assert set(comparison_cases()) == {"cs-nine-disc", "cs-photoelastic"}
+    assert set(reference_cases()) == {"cs-nine-disc", "cs-photoelastic", "conformance-3d"}
+    assert set(comparison_cases()) == {"cs-nine-disc", "cs-photoelastic", "conformance-3d"}
+    plan3 = CASES["conformance-3d"].reference_plan()
+    assert plan3.engine("yade", "oblique-plane-r2").compensate_walls is False  # the engine object comes from the plan
     plan = CASES["cs-nine-disc"].reference_plan()
     assert plan.store == "cs-nine-disc" and "undamped" in plan.variants("liggghts")
     assert CASES["cs-nine-disc"].comparison_case().name == "cs-nine-disc-engines"

@@ -83,18 +83,10 @@ def test_yade_deck_is_the_fixed_program_and_data_is_numbers(tmp_path):
     assert (tmp_path / "deck.py").read_text() == fixed
     data = json.loads((tmp_path / "scene.json").read_text())
 
-    def leaves(o):
-        if isinstance(o, dict):
-            for v in o.values():
-                yield from leaves(v)
-        elif isinstance(o, list):
-            for v in o:
-                yield from leaves(v)
-        else:
-            yield o
-
     import re
-    for v in leaves(data):
+
+    from helpers import json_leaves
+    for v in json_leaves(data):
         assert v is None or isinstance(v, (int, float, bool)) or re.fullmatch(r"[A-Za-z][A-Za-z0-9_\-|]*", v), v
 
 

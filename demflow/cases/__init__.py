@@ -19,6 +19,7 @@ from .thesis_simple_shear import SimpleShear
 from .thesis_simple_shear_study import SimpleShearStudy
 from .hertz_impacts import HertzImpacts
 from .ch3_stack import DampedStack, ElasticStack
+from .conformance_3d import Conformance3D
 from .ch3_chain import ImpulseChain
 from .miyata_uniaxial3d import MiyataUniaxial3D
 
@@ -34,6 +35,7 @@ CASES[ElasticStack.name] = ElasticStack()
 CASES[DampedStack.name] = DampedStack()
 CASES[ImpulseChain.name] = ImpulseChain()
 CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
+CASES[Conformance3D.name] = Conformance3D()
 
 
 def get_case(name: str) -> Case:

@@ -132,12 +132,15 @@ class CaseRun:
 class ReferencePlan:
     """How ``demflow reference CASE`` makes a case's engine reference runs: the case name the runs
     are stored under (reference_runs/STORE/), the parameters, the variants an engine can run
-    (engine name → variant names) and the scene of a variant (variant, parameters → Scene)."""
+    (engine name → variant names), the scene of a variant (variant, parameters → Scene) and,
+    optionally, the engine object that runs a variant (engine name, variant → Engine; default
+    ``demflow.engines.get_engine(name)``, the 2D engines)."""
 
     store: str
     params: dict[str, Any]
     variants: Callable[[str], tuple[str, ...]]
     scene: Callable[[str, dict], Scene]
+    engine: Callable[[str, str], Any] | None = None
 
 
 class Case:

@@ -11,7 +11,9 @@ and every sum runs in the same order whatever the thread count.
 Pair pass (:func:`sphere_forces`).  n is the unit normal from i to j (to the plane: minus its
 normal), δ = R_i + R_j - |d| (plane: R_i - distance), the contact point mid-overlap, lever arms
 (R - δ/2) as YADE's ScGeom.  The tangential history vector (columns 0-2) is rotated into the
-current tangent plane keeping its length (projection and rescale, as LIGGGHTS), then the law
+current tangent plane keeping its length (projection and rescale, before the law's increment; LIGGGHTS
+3.8.0 projects after the increment without rescaling, YADE 2023.02a rotates by T × (n_old × n): an
+O(θ²)-per-step difference, capabilities feature 'history-rotation'), then the law
 (:func:`demflow.laws.base.law_force3`) returns the normal force Fn and tangential force T on i:
 F_i = -Fn n + T, F_j = -F_i, moments (R_i - δ/2) n × T and (R_j - δ/2) n × T.
 """

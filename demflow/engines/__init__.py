@@ -38,11 +38,24 @@ class DemflowEngine(Engine):
 ENGINES: dict[str, Engine] = {"demflow": DemflowEngine(), "yade": YadeEngine(), "liggghts": LiggghtsEngine()}
 
 
+def get_engine3d(name: str, **options) -> Engine:
+    """The engine that runs 3D sphere scenes (:class:`~demflow.scene3d.Scene3D`): demflow, YADE or LIGGGHTS;
+    ``options`` go to its constructor (YADE: ``compensate_walls``, ``avoid_ratcheting``)."""
+    from .base3d import Demflow3DEngine
+    from .liggghts3d import Liggghts3DEngine
+    from .yade3d import Yade3DEngine
+
+    classes = {"demflow": Demflow3DEngine, "yade": Yade3DEngine, "liggghts": Liggghts3DEngine}
+    if name not in classes:
+        raise EngineError(f"unknown engine {name!r}; choose one of {', '.join(classes)}")
+    return classes[name](**options)
+
+
 def get_engine(name: str) -> Engine:
     if name not in ENGINES:
         raise EngineError(f"unknown engine {name!r}; choose one of {', '.join(ENGINES)}")
     return ENGINES[name]
 
 
-__all__ = ["ENGINES", "get_engine", "Engine", "EngineError", "EngineFailed", "EngineNotFound", "EngineOutputError",
+__all__ = ["ENGINES", "get_engine", "get_engine3d", "Engine", "EngineError", "EngineFailed", "EngineNotFound", "EngineOutputError",
            "EngineTimeout", "EngineUnsupported", "DemflowEngine", "YadeEngine", "LiggghtsEngine"]

@@ -39,6 +39,8 @@ class Expression:
     construct: str
     verdict: str
     note: str = ""
+    uses: Callable | None = None  # this engine's own test of a scene (else the feature's ``uses``)
+    remedy: str = ""  # this engine's own remedy (else the feature's)
 
 
 @dataclass(frozen=True)
@@ -172,25 +174,26 @@ def feature(key: str) -> Feature:
     raise KeyError(f"no feature {key!r} in the capabilities table; known: {', '.join(f.key for f in FEATURES)}")
 
 
-def refuse_inexpressible(engine: str, scene) -> None:
+def refuse_inexpressible(engine: str, scene, features: tuple[Feature, ...] | None = None) -> None:
     """Raise EngineUnsupported if ``scene`` uses a feature ``engine`` ('yade' or 'liggghts') cannot
     express, or leaves the matching mode it needs; the message names the feature, the engine, what
     the engine does instead and what to do.  Value-dependent limits (``exact`` with a condition)
     are checked by the deck writers themselves."""
     name = ENGINE_NAMES[engine]
-    for f in FEATURES:
+    for f in FEATURES if features is None else features:
         e = f.expression(engine)
-        if f.uses is None or e.verdict not in (CANNOT, MATCHING) or not f.uses(scene):
+        uses = e.uses or f.uses
+        if uses is None or e.verdict not in (CANNOT, MATCHING) or not uses(scene):
             continue
         what = "cannot express" if e.verdict == CANNOT else "expresses only demflow's matching mode of"
         raise EngineUnsupported(
             f"{name} {what} {f.item} (capabilities table, feature {f.key!r}): scene {scene.name!r} uses "
-            f"{f.demflow}; {name} has {e.construct}. To run it in {name}: {f.remedy}")
+            f"{f.demflow}; {name} has {e.construct}. To run it in {name}: {e.remedy or f.remedy}")
 
 
-def as_html() -> str:
-    """The model-equivalence page's table: one row per feature, each engine's construct with its
-    verdict and condition or measured consequence."""
+def as_html(features: tuple[Feature, ...] | None = None) -> str:
+    """The model-equivalence page's table: one row per feature (default :data:`FEATURES`, the 2D
+    rows), each engine's construct with its verdict and condition or measured consequence."""
     cols = ["feature", "demflow", "YADE", "YADE verdict", "LIGGGHTS", "LIGGGHTS verdict", "measured"]
     head = "".join(f"<th>{c}</th>" for c in cols)
 
@@ -200,5 +203,201 @@ def as_html() -> str:
     rows = "".join(
         "<tr>" + "".join(f"<td>{html.escape(v)}</td>" for v in (
             f.item, f.demflow, f.yade.construct, verdict(f.yade), f.liggghts.construct, verdict(f.liggghts),
-            f.measured)) + "</tr>" for f in FEATURES)
+            f.measured)) + "</tr>" for f in (FEATURES if features is None else features))
     return f"<table><tr>{head}</tr>{rows}</table>"
+
+
+# ------------------------------------------------------------------------------------------ 3D spheres
+# The rows of the 3D harness (demflow.engines.yade3d, liggghts3d): Scene3D with the Hertz-Mindlin law.
+# Measured on the conformance-3d case (reference_runs/conformance-3d, tests/test_conformance3d.py).
+def _laws3d(scene):
+    return list(scene.laws.values())
+
+
+def _hertz(law) -> bool:
+    from ..laws.hertz_mindlin import HertzMindlinLaw
+
+    return isinstance(law, HertzMindlinLaw)
+
+
+def _tangential(law) -> bool:
+    return _hertz(law) and law.tangential != "none" and law.friction > 0
+
+
+def _linear_3d(scene) -> bool:
+    return any(not _hertz(law) for law in _laws3d(scene))
+
+
+def _not_incremental(scene) -> bool:
+    return any(_tangential(law) and law.shear_spring != "incremental" for law in _laws3d(scene))
+
+
+def _not_total(scene) -> bool:
+    return any(_tangential(law) and law.shear_spring != "total" for law in _laws3d(scene))
+
+
+def _md(scene) -> bool:
+    return any(_tangential(law) and law.tangential == "mindlin-deresiewicz" for law in _laws3d(scene))
+
+
+def _elastic_cap(scene) -> bool:
+    return any(_tangential(law) and law.friction_cap != "total" for law in _laws3d(scene))
+
+
+def _global_damping_3d(scene) -> bool:
+    d = scene.damping
+    return d.C > 0 or d.C_rot > 0 or d.alpha > 0
+
+
+def _local_damping(scene) -> bool:
+    return scene.local_damping > 0
+
+
+def _servo_3d(scene) -> bool:
+    return any(p.servo is not None for p in scene.planes)
+
+
+def _fixed(scene) -> bool:
+    return scene.spheres.fixed is not None and any(bool(f) for f in scene.spheres.fixed)
+
+
+# Sizes of the named differences, measured on conformance-3d (2026-11-24, YADE 2023.02a, LIGGGHTS 3.8.0):
+# the trajectory difference max(|Δx|/R, |Δv|/V, |Δω|R/V, |ΔF_plane|/F_max) over every recorded step
+# (demflow.engines.base3d.trajectory_difference).  tests/test_conformance3d.py recomputes each one and
+# checks it against this table; tests/reference_contact.py reproduces each engine by flipping one switch.
+MEASURED_3D = {
+    "round-off": 9.8e-12,  # the largest engine-vs-demflow difference where the models are equivalent
+    "shear-spring-3d/oblique-plane": 0.254,  # demflow total vs incremental (= LIGGGHTS vs YADE)
+    "shear-spring-3d/periodic-pair": 0.0544,
+    "history-rotation/yade": 3.0e-10,  # periodic pair, engine vs demflow; half at Δt/2
+    "history-rotation/liggghts": 5.1e-10,
+    "plane-velocity-timing": 0.171,  # LIGGGHTS, oblique-plane-lift (normal velocity 0 -> 0.3 m/s in contact)
+    "r2-wall": 0.182,  # YADE's own box vs demflow's plane, oblique-plane
+    "friction-cap-3d": 0.423,  # demflow elastic vs total cap, oblique-plane
+    "shear-damping-ratio": 0.314,  # demflow e_t = 1 vs e_t = e_n, oblique-plane
+    "avoid-ratcheting": 1.9e-4,  # YADE's default avoidGranularRatcheting vs demflow, periodic pair
+    "initial-velocity-3d": 0.030,  # demflow with v(0) taken as v(-Δt/2) under gravity, moving-plate
+}
+_M = MEASURED_3D
+
+FEATURES_3D: tuple[Feature, ...] = (
+    Feature("law-3d", "Hertz-Mindlin law (3D)", "HertzMindlinLaw: F = 4/3 E*√R* δ^{3/2}, k_t = 8G*√(R*δ)",
+            yade=Expression("FrictMat + Ip2_FrictMat_FrictMat_MindlinPhys(betan, betas, frictAngle) + "
+                            "Law2_ScGeom_MindlinPhys_Mindlin; kno = 4/3 E*√R*, kso = 8G*√R* (2023.02a: series G*, "
+                            "also for unlike materials)", EXACT),
+            liggghts=Expression("pair_style gran model hertz tangential history limitForce on (Yeff, Geff per type "
+                                "pair)", EXACT),
+            measured=f"trajectories equal to round-off (≤ {_M['round-off']:.2g}) on every conformance-3d scene "
+                     "where the models are equivalent"),
+    Feature("linear-law-3d", "linear law (3D)", "LinearLaw between spheres",
+            yade=Expression("not in the 3D deck", CANNOT), liggghts=Expression("not in the 3D deck", CANNOT),
+            uses=_linear_3d,
+            remedy="give every material pair a HertzMindlinLaw (the 3D decks express the Hertz-Mindlin law only)"),
+    Feature("mindlin-deresiewicz", "Mindlin-Deresiewicz tangential law", "tangential='mindlin-deresiewicz' "
+            "(ch3 eqs 3.24-3.25: loading/unloading/reloading stiffness)",
+            yade=Expression("Law2_ScGeom_MindlinPhys_Mindlin is the no-slip stiffness only", CANNOT),
+            liggghts=Expression("tangential history is the no-slip stiffness only", CANNOT), uses=_md,
+            remedy="run the scene with tangential='mindlin' (both engines' law)"),
+    Feature("shear-spring-3d", "Mindlin shear spring (3D)",
+            "`shear_spring='incremental'`: T += −k_t v_t Δt (k_t = 8G*a now); `'total'`: u += v_t Δt, T = −k_t u",
+            yade=Expression("shearElastic −= ks·v_s Δt (incremental)", MATCHING, uses=_not_incremental,
+                            remedy="run the scene with HertzMindlinLaw(shear_spring='incremental'), YADE's matching "
+                                   "mode"),
+            liggghts=Expression("tangential history: shear += v_t Δt, F_t = −k_t·shear (total: k_t now × all of "
+                                "the displacement)", MATCHING, uses=_not_total,
+                                remedy="run the scene with HertzMindlinLaw(shear_spring='total'), LIGGGHTS's "
+                                       "matching mode"),
+            measured=f"total vs incremental: {_M['shear-spring-3d/oblique-plane']:.3g} (oblique-plane, stick then "
+                     f"slip), {_M['shear-spring-3d/periodic-pair']:.3g} (periodic pair); LIGGGHTS vs YADE is the same "
+                     "number; none where the overlap does not change while sticking (moving plate)"),
+    Feature("friction-cap-3d", "Coulomb cap (3D)", "|T| ≤ μ·Fn with Fn total (`friction_cap='total'`) or its "
+            "elastic part (`'elastic'`)",
+            yade=Expression("maxFs = |normalForce| tan φ, normalForce with the dashpot", MATCHING),
+            liggghts=Expression("Ft_friction = μ|Fn|, Fn with the dashpot", MATCHING),
+            measured=f"elastic vs total: {_M['friction-cap-3d']:.3g} (oblique-plane, e = 0.5)", uses=_elastic_cap,
+            remedy="run the scene with HertzMindlinLaw(friction_cap='total'), both engines' rule"),
+    Feature("damping-3d", "normal and tangential dashpots (3D)",
+            "c = 2ζ√(m* k) with the tangent stiffness, Fn ≥ 0; ζ from e by a convention ('exact', 'yade', "
+            "'liggghts')",
+            yade=Expression("betan = ζ_n, betas = ζ_t per material pair (c = 2β√(m̄ k))", EXACT,
+                            "any convention: the deck passes demflow's ζ"),
+            liggghts=Expression("coefficientRestitution e' per type pair with √(5/6)|ln e'|/√(ln²e' + π²) = ζ_n",
+                                EXACT, "ζ_n < √(5/6); ζ_t = ζ_n, or 0 (tangential_damping off); other values are "
+                                       "refused"),
+            measured="round-off with e = 0.5 and 0.7 ('exact' convention) in both engines"),
+    Feature("shear-damping-ratio", "tangential dashpot vs normal dashpot",
+            "ζ_t from restitution_tangential (None: ζ_t = ζ_n), c_t = 2ζ_t√(m* k_t)",
+            yade=Expression("betas free per pair (es or betas); c_s/c_n = (β_s/β_n)√(k_s/k_n)", EXACT),
+            liggghts=Expression("one β: γ_t/γ_n = √(S_t/S_n) (ζ_t = ζ_n), or 0", EXACT,
+                                "ζ_t ∈ {ζ_n, 0}; other values refused"),
+            measured=f"e_t = 1 vs e_t = e_n: {_M['shear-damping-ratio']:.3g} (oblique-plane); both engines "
+                     "reproduce each to round-off"),
+    Feature("dashpot-mass-3d", "dashpot mass", "m* = m_i m_j/(m_i + m_j) of the spheres (plane: m_i)",
+            yade=Expression("m̄ of the two bodies' state.mass (a clump member's own mass)", EXACT,
+                            "for spheres the member is the body: they coincide"),
+            liggghts=Expression("meff of the two atoms (multisphere: the body mass)", EXACT,
+                                "for spheres they coincide"),
+            measured="head-on (unlike masses, e = 0.5): round-off in both engines"),
+    Feature("walls-3d", "planes (3D)", "infinite planes, contact R* = R, prescribed translation",
+            yade=Expression("Box bodies with a compensating material (the box-sphere R* is R/2): YADE's E*, G* of "
+                            "the sphere against it are √2 demflow's; placed at demflow's plane point with the step's "
+                            "velocity before each InteractionLoop", EXACT,
+                            "one sphere material per plane (else refused); a rigid plane gets a negative fictitious "
+                            "modulus"),
+            liggghts=Expression("one-triangle STL mesh per plane in one fix wall/gran (reff = R; a rigid plane "
+                                "E = 1e300), fix move/mesh linear/variable", EXACT, "no planes in a periodic box"),
+            measured="round-off (oblique-plane, rigid moving plate, plate velocity switches)"),
+    Feature("r2-wall", "YADE's own box-sphere radius", "R* = R against a plane",
+            yade=Expression("refR1 = refR2 = R: R* = R/2, kno and kso 1/√2 of the flat-wall values", DIFFERS,
+                            "compensated in the deck (walls-3d)"),
+            liggghts=Expression("reff = radius for walls", EXACT),
+            measured=f"uncompensated YADE box vs demflow's plane: {_M['r2-wall']:.3g} (oblique-plane); equal to "
+                     "round-off to demflow with a plane 1/√2 as stiff"),
+    Feature("plane-velocity-timing", "plane velocity in the contact at a velocity switch",
+            "the contact at step n sees the plane's velocity of step n (the one that moves it to step n + 1)",
+            yade=Expression("box velocity set before the InteractionLoop of each step", EXACT),
+            liggghts=Expression("the mesh contact sees the velocity that moved the mesh into place; the deck switches "
+                                "the in-plane part of the velocity one step early (exact: a plane's own in-plane "
+                                "displacement changes no contact)", DIFFERS,
+                                "a normal velocity switch during contact is seen one step late"),
+            measured=f"normal velocity 0 → 0.3 m/s during contact: {_M['plane-velocity-timing']:.3g} (LIGGGHTS, "
+                     "oblique-plane-lift); in-plane switches: round-off (moving-plate-phases)"),
+    Feature("history-rotation", "tangential history when the contact normal turns",
+            "projected onto the new tangent plane and rescaled to its length, before the increment",
+            yade=Expression("ScGeom::rotate: T −= T × (n_old × n), then the twist about n", DIFFERS,
+                            "O(θ²) per step (θ the normal's turn per step): first order in Δt"),
+            liggghts=Expression("shear += v_t Δt, then projected onto the tangent plane (no rescale)", DIFFERS,
+                                "O(θ²) per step: first order in Δt"),
+            measured=f"periodic pair (1.4e-3 rad turn over 52 steps): {_M['history-rotation/yade']:.2g} (YADE), "
+                     f"{_M['history-rotation/liggghts']:.2g} (LIGGGHTS), halved at Δt/2; each engine's own rule "
+                     "reproduces it to round-off"),
+    Feature("avoid-ratcheting", "velocity at the contact point (sphere pairs)", "lever arms R − δ/2",
+            yade=Expression("Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=False) in the deck; YADE's default "
+                            "True changes the relative velocity", EXACT, "with the deck's setting"),
+            liggghts=Expression("cr = R − δ/2", EXACT),
+            measured=f"YADE's default vs demflow: {_M['avoid-ratcheting']:.2g} (periodic pair; not a plain lever arm "
+                     "R: that misses YADE's run by 3e-4)"),
+    Feature("initial-velocity-3d", "initial velocity (3D)", "v(−Δt/2)",
+            yade=Expression("v(−Δt/2)", EXACT),
+            liggghts=Expression("v(0): the deck gives v(−Δt/2) + gΔt/2", EXACT,
+                                "when no contact acts at t = 0 (else off by F_c(0)Δt/2m in the first half step)"),
+            measured=f"taking v(0) as v(−Δt/2) under gravity: {_M['initial-velocity-3d']:.2g} (moving-plate)"),
+    Feature("periodic-3d", "periodic box (3D)", "periodic along x and/or y, minimum image",
+            yade=Expression("periodic cell along x, y and z (z period 1000× the scene)", EXACT,
+                            "periodic along both x and y (else refused)"),
+            liggghts=Expression("boundary p p f (or p f f, f p f)", EXACT),
+            measured="periodic pair: round-off against each engine's own history rotation"),
+    Feature("global-damping-3d", "mass-proportional damping (3D)", "C = αm, C* = αI (ch3 eq 3.19)",
+            yade=Expression("not in the 3D deck", CANNOT), liggghts=Expression("not in the 3D deck", CANNOT),
+            uses=_global_damping_3d, remedy="run the scene with GlobalDamping() (no mass-proportional damping)"),
+    Feature("local-damping-3d", "local non-viscous damping", "Cundall's α_l on each force component (Miyata eq 33)",
+            yade=Expression("NewtonIntegrator(damping) would be it; not in the 3D deck (not measured)", CANNOT),
+            liggghts=Expression("no local damping in LIGGGHTS", CANNOT),
+            uses=_local_damping, remedy="run the scene with local_damping=0"),
+    Feature("servo-plates", "servo plates", "PlateServo (thesis eqs 5.11-5.12 in 3D)",
+            yade=Expression("not in the 3D deck", CANNOT), liggghts=Expression("not in the 3D deck", CANNOT),
+            uses=_servo_3d, remedy="replace the servo by prescribed PlanePhase motion"),
+    Feature("fixed-spheres", "fixed spheres", "Spheres(fixed=...): not integrated, moving with their velocity",
+            yade=Expression("not in the 3D deck", CANNOT), liggghts=Expression("not in the 3D deck", CANNOT),
+            uses=_fixed, remedy="make every sphere free (Spheres(fixed=None))"),
+)

@@ -149,11 +149,12 @@ def seal(path: Path) -> bool:
     return True
 
 
-def load(case: str, variant: str, engine: str, base: Path | None = None) -> Results:
-    """The verified tables of a stored reference."""
+def load(case: str, variant: str, engine: str, base: Path | None = None, loader=None) -> Results:
+    """The verified tables of a stored reference (``loader(path)`` reads them: default
+    :meth:`Results.load`; 3D trajectories: :meth:`demflow.engines.base3d.Trajectory3D.load`)."""
     path = location(case, variant, engine, base)
     meta = verify(path)
-    res = Results.load(path)
+    res = (loader or Results.load)(path)
     res.meta.update(reference=str(path), engine_version=meta["engine_version"], reference_date=meta["date"])
     return res
 
