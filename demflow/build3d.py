@@ -10,7 +10,7 @@ import numpy as np
 
 from .laws.hertz_mindlin import HertzMindlin
 from .laws.linear import Linear
-from .scene import SceneError
+from .scene import SceneError, check_name, is_number, type_phrase
 from .scene3d import Scene3D, Spheres, check_scene3d
 from .simulation3d import Simulation3D
 from .state3d import Bodies3, Box3, Damping3, Loading3, Planes3, Spheres3, Triangles3
@@ -27,18 +27,47 @@ def rayleigh_time_step(r: np.ndarray, mass: np.ndarray, young: np.ndarray, poiss
 
 
 def _array(where: str, v, n: int, shape=None, dtype=np.float64) -> np.ndarray:
-    try:
-        a = np.array(v, dtype=dtype)
-    except (TypeError, ValueError):
-        raise SceneError(f"{where} cannot be read as numbers ({type(v).__name__}); give {n} values") from None
-    want = (n,) if shape is None else (n,) + shape
+    """Per-sphere numbers (``dtype`` float64: finite reals, no bools) or flags (bool: bools only) of
+    shape (n,) + shape, each entry checked; the message names the entry."""
+    want = (n,) + (shape or ())
+    if isinstance(v, np.ndarray) and v.dtype.kind == ("f" if dtype == np.float64 else "b"):
+        a = v  # fast path for arrays of the right kind
+    else:
+        try:
+            a = np.empty(len(v), dtype=object) if shape is None and isinstance(v, (list, tuple)) else None
+            if a is not None:
+                a[:] = list(v)  # entries kept as given (a list entry stays one object: refused below)
+            else:
+                a = np.array(v, dtype=object)
+        except (TypeError, ValueError):
+            raise SceneError(f"{where}={v!r} cannot be read as an array; give {want} values") from None
     if a.shape != want:
         raise SceneError(f"{where} has shape {a.shape}, not {want}; give one entry per sphere")
+    if a.dtype == object:
+        for idx, x in np.ndenumerate(a):
+            ok = is_number(x) if dtype == np.float64 else isinstance(x, (bool, np.bool_))
+            if not ok:
+                what = "a finite number" if dtype == np.float64 else "True or False"
+                raise SceneError(f"{where}[{', '.join(map(str, idx))}]={x!r} is {type_phrase(x)}; give {what}")
+    a = a.astype(dtype)
     if dtype == np.float64 and not np.all(np.isfinite(a)):
-        k = int(np.argwhere(~np.isfinite(a))[0][0])
-        raise SceneError(f"{where}[{k}] = {a.flat[np.flatnonzero(~np.isfinite(a))[0]]} is not finite; give "
-                         "finite numbers")
+        idx = tuple(int(c) for c in np.argwhere(~np.isfinite(a))[0])
+        raise SceneError(f"{where}[{', '.join(map(str, idx))}]={a[idx]!r} is not finite; give finite numbers")
     return a
+
+
+def _common_length(path: str, obj, keys) -> int:
+    """The number of entries of the arrays ``keys`` of ``obj``, which must agree."""
+    lens = []
+    for k in keys:
+        v = getattr(obj, k)
+        if isinstance(v, (str, bytes)) or not hasattr(v, "__len__"):
+            raise SceneError(f"{path}.{k}={v!r} is {type_phrase(v)}, not a sequence of numbers; give one per entry")
+        lens.append(len(v))
+    if len(set(lens)) != 1:
+        raise SceneError(f"{', '.join(f'{path}.{k}' for k in keys)} have lengths {', '.join(map(str, lens))}; give the "
+                         "same number of entries in each")
+    return lens[0]
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
@@ -64,7 +93,7 @@ def _clumps(c, index, first: int):
     if not isinstance(T, ClumpTemplate):
         raise SceneError(f"scene.clumps.template={T!r} is not a ClumpTemplate; build one with "
                          "ClumpTemplate.ellipsoid_like(K) or ClumpTemplate.from_spheres(...)")
-    nb = len(c)
+    nb = _common_length("scene.clumps", c, ("x", "y", "z"))
     pos = np.stack([_array(f"scene.clumps.{a}", getattr(c, a), nb) for a in "xyz"], axis=1)
     q = np.tile([1.0, 0.0, 0.0, 0.0], (nb, 1)) if c.orientation is None else \
         _array("scene.clumps.orientation", c.orientation, nb, (4,))
@@ -72,10 +101,12 @@ def _clumps(c, index, first: int):
     if np.any(np.abs(norm - 1.0) > 1e-9):
         k = int(np.argmax(np.abs(norm - 1.0)))
         raise SceneError(f"scene.clumps.orientation[{k}] has norm {norm[k]:.12g}; give unit quaternions (w, x, y, z)")
+    if nb == 0:
+        raise SceneError("scene.clumps has no clumps; give positions or leave scene.clumps=None")
     vel = np.zeros((nb, 3)) if c.velocity is None else _array("scene.clumps.velocity", c.velocity, nb, (3,))
     w = (np.zeros((nb, 3)) if c.angular_velocity is None
          else _array("scene.clumps.angular_velocity", c.angular_velocity, nb, (3,)))
-    if c.material not in index:
+    if not isinstance(c.material, str) or c.material not in index:
         raise SceneError(f"scene.clumps.material={c.material!r} is not declared; add it to scene.materials")
     K = len(T.radii)
     R = quat_to_matrix(q)
@@ -96,7 +127,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
     """Check ``scene`` and return a :class:`Simulation3D` ready to run."""
     check_scene3d(scene)
     s = scene.spheres if scene.spheres is not None else Spheres(x=[], y=[], z=[], radius=[], material=[])
-    n = len(s)
+    n = _common_length("scene.spheres", s, ("x", "y", "z", "radius"))
     if n == 0 and (scene.clumps is None or len(scene.clumps) == 0):
         raise SceneError("scene.spheres is empty and there are no clumps; give at least one sphere or clump")
     x = _array("scene.spheres.x", s.x, n)
@@ -105,14 +136,20 @@ def build3d(scene: Scene3D) -> Simulation3D:
     r = _array("scene.spheres.radius", s.radius, n)
     if np.any(r <= 0):
         k = int(np.argmax(r <= 0))
-        raise SceneError(f"scene.spheres.radius[{k}] = {r[k]} must be > 0")
-    mats = [s.material] * n if isinstance(s.material, str) else list(s.material)
+        raise SceneError(f"scene.spheres.radius[{k}]={r[k]!r} must be > 0; give positive radii")
+    if isinstance(s.material, str):
+        mats = [s.material] * n
+    elif isinstance(s.material, (list, tuple, np.ndarray)):
+        mats = list(s.material)
+    else:
+        raise SceneError(f"scene.spheres.material={s.material!r} is {type_phrase(s.material)}; give a material "
+                         "name or one per sphere")
     if len(mats) != n:
         raise SceneError(f"scene.spheres.material has {len(mats)} entries for {n} spheres; give one per sphere "
                          "or one name for all")
     for k, m in enumerate(mats):
-        if m not in scene.materials:
-            raise SceneError(f"scene.spheres.material[{k}] = {m!r} is not declared; add it to scene.materials")
+        if not isinstance(m, str) or m not in scene.materials:
+            raise SceneError(f"scene.spheres.material[{k}]={m!r} is not declared; add it to scene.materials")
     names = list(scene.materials)
     index = {m: k for k, m in enumerate(names)}
     mat = np.array([index[m] for m in mats], np.int64)
@@ -123,8 +160,10 @@ def build3d(scene: Scene3D) -> Simulation3D:
         mass = rho * 4.0 / 3.0 * math.pi * r ** 3
     if np.any(mass <= 0):
         k = int(np.argmax(mass <= 0))
-        raise SceneError(f"sphere {k} has mass {mass[k]} (material {mats[k]!r}, density "
-                         f"{scene.materials[mats[k]].density}); a mass must be > 0: give a density or a mass")
+        where = (f"scene.spheres.mass[{k}]" if s.mass is not None
+                 else f"scene.materials[{mats[k]!r}].density (sphere {k})")
+        raise SceneError(f"{where}: sphere {k} has mass {mass[k]!r}; a mass must be > 0: give a positive density "
+                         "or mass")
     vel = np.zeros((n, 3)) if s.velocity is None else _array("scene.spheres.velocity", s.velocity, n, (3,))
     angvel = (np.zeros((n, 3)) if s.angular_velocity is None
               else _array("scene.spheres.angular_velocity", s.angular_velocity, n, (3,)))
@@ -221,7 +260,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
     reach = 2.0 * float(r.max()) + skin
     for axis, length in (("x", lx), ("y", ly)):
         if length and length <= 2.0 * reach:
-            raise SceneError(f"scene.box periodic_{axis}: the period {length:.6g} must exceed twice the reach "
+            raise SceneError(f"scene.box.periodic_{axis}: the period {length:.6g} must exceed twice the reach "
                              f"2·r_max + skin = {reach:.6g} (minimum image); widen the box or reduce the skin")
 
     # the critical time step

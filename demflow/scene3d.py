@@ -20,7 +20,8 @@ from typing import Sequence
 
 import numpy as np
 
-from .scene import Box, ContactModel, GlobalDamping, Material, SceneError, check_identifier
+from .scene import (Box, ContactModel, GlobalDamping, Material, SceneError, check_flag, check_items, check_name,
+                    check_number, check_type, check_vector, check_whole)
 
 
 @dataclass
@@ -46,7 +47,7 @@ class Spheres:
     fixed: Sequence[bool] | None = None
 
     def __len__(self) -> int:
-        return len(np.atleast_1d(self.x))
+        return len(self.x) if hasattr(self.x, "__len__") and not isinstance(self.x, (str, bytes)) else 1
 
 
 @dataclass
@@ -71,7 +72,7 @@ class Clumps:
     angular_velocity: Sequence[Sequence[float]] | None = None
 
     def __len__(self) -> int:
-        return len(np.atleast_1d(self.x))
+        return len(self.x) if hasattr(self.x, "__len__") and not isinstance(self.x, (str, bytes)) else 1
 
 
 @dataclass(frozen=True)
@@ -194,115 +195,116 @@ class Scene3D:
             "HertzMindlinLaw(...) or LinearLaw(kn=...) to the scene")
 
 
-def _finite(where: str, v, *, positive=False, nonneg=False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-        raise SceneError(f"{where}={v!r} is not a number; give a finite float")
-    v = float(v)
-    if not math.isfinite(v):
-        raise SceneError(f"{where}={v!r} is not finite; give a finite number")
-    if positive and v <= 0:
-        raise SceneError(f"{where}={v} must be > 0")
-    if nonneg and v < 0:
-        raise SceneError(f"{where}={v} must be >= 0")
-    return v
+def _vector3(path: str, v, nonzero: bool = False) -> np.ndarray:
+    return np.array(check_vector(path, v, 3, nonzero=nonzero))
 
 
-def _vector3(where: str, v) -> np.ndarray:
-    try:
-        a = np.asarray(v, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise SceneError(f"{where}={v!r} is not three numbers; give (x, y, z)") from None
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise SceneError(f"{where}={v!r}: give three finite numbers (x, y, z)")
-    return a
+def _phases(path: str, phases) -> None:
+    check_items(path, phases)
+    for q, ph in enumerate(phases):
+        check_type(f"{path}[{q}]", ph, PlanePhase)
+        check_whole(f"{path}[{q}].cycles", ph.cycles)
+        _vector3(f"{path}[{q}].velocity", ph.velocity)
 
 
 def check_scene3d(scene: Scene3D) -> None:
-    """Refuse what cannot be built, naming the field, the value, the rule and the fix."""
-    check_identifier("scene", scene.name)
+    """Refuse what cannot be built, naming the field (a dotted path), the value, the rule and the fix.
+    The per-sphere arrays are checked entry by entry in :func:`demflow.build3d.build3d`."""
+    check_name("scene.name", scene.name)
+    check_type("scene.materials", scene.materials, dict)
     for name, m in scene.materials.items():
-        check_identifier("material", name)
-        if not isinstance(m, Material):
-            raise SceneError(f"scene.materials[{name!r}]={m!r} is not a Material; give Material(density=...)")
+        check_name(f"scene.materials key {name!r}", name)
+        check_type(f"scene.materials[{name!r}]", m, Material)
         m.check(f"scene.materials[{name!r}]")
+    check_type("scene.laws", scene.laws, dict)
     for pair, law in scene.laws.items():
-        if not (isinstance(pair, tuple) and len(pair) == 2 and all(p in scene.materials for p in pair)):
+        if not (isinstance(pair, tuple) and len(pair) == 2 and all(isinstance(p, str) and p in scene.materials
+                                                                    for p in pair)):
             raise SceneError(f"scene.laws key {pair!r} is not a pair of declared materials "
-                             f"({sorted(scene.materials)})")
+                             f"({sorted(scene.materials)}); give (material, material)")
         if not hasattr(law, "check"):
             raise SceneError(f"scene.laws[{pair!r}]={law!r} is not a contact law; give HertzMindlinLaw(...) "
                              "or LinearLaw(kn=...)")
         law.check(pair)
-    _finite("scene.local_damping", scene.local_damping, nonneg=True)
-    if not isinstance(scene.adaptive_damping, bool):
-        raise SceneError(f"scene.adaptive_damping={scene.adaptive_damping!r}: give True or False")
-    if scene.local_damping >= 1.0:
-        raise SceneError(f"scene.local_damping={scene.local_damping} must be < 1 (a coefficient of "
-                         "Cundall's local damping; YADE uses 0.2-0.4)")
-    scene.damping.check()
+    check_number("scene.local_damping", scene.local_damping, ge=0.0, lt=1.0)
+    check_flag("scene.adaptive_damping", scene.adaptive_damping)
+    check_flag("scene.allow_supercritical", scene.allow_supercritical)
+    scene.damping.check("scene.damping")
+    scene.contact_model.check("scene.contact_model")
     _vector3("scene.gravity", scene.gravity)
     if scene.dt is not None:
-        _finite("scene.dt", scene.dt, positive=True)
-    _finite("scene.dt_fraction", scene.dt_fraction, positive=True)
-    if isinstance(scene.n_steps, bool) or not isinstance(scene.n_steps, (int, np.integer)) or scene.n_steps < 0:
-        raise SceneError(f"scene.n_steps={scene.n_steps!r}: give an integer >= 0")
+        check_number("scene.dt", scene.dt, gt=0.0, unit="time")
+    check_number("scene.dt_fraction", scene.dt_fraction, gt=0.0)
+    check_whole("scene.n_steps", scene.n_steps)
     if scene.skin is not None:
-        _finite("scene.skin", scene.skin, positive=True)
-    scene.box.check()
+        check_number("scene.skin", scene.skin, gt=0.0, unit="length")
+    check_type("scene.box", scene.box, Box)
+    scene.box.check("scene.box")
     o = scene.outputs
-    if isinstance(o.every, bool) or not isinstance(o.every, (int, np.integer)) or o.every < 0:
-        raise SceneError(f"scene.outputs.every={o.every!r}: give an integer >= 0")
+    check_type("scene.outputs", o, Outputs3D)
+    check_whole("scene.outputs.every", o.every)
+    check_flag("scene.outputs.orientation", o.orientation)
+    check_items("scene.outputs.snapshots", o.snapshots)
+    for k, st in enumerate(o.snapshots):
+        check_whole(f"scene.outputs.snapshots[{k}]", st)
+    check_items("scene.outputs.track_spheres", o.track_spheres)
+    n_spheres = 0 if scene.spheres is None else len(scene.spheres)
+    for k, i in enumerate(o.track_spheres):
+        check_whole(f"scene.outputs.track_spheres[{k}]", i, le=max(n_spheres - 1, 0))
+        if n_spheres == 0:
+            raise SceneError(f"scene.outputs.track_spheres[{k}]={i!r}: the scene has no spheres to track")
     names = set()
+    check_items("scene.meshes", scene.meshes)
     for k, mh in enumerate(scene.meshes):
-        check_identifier("mesh", mh.name)
+        path = f"scene.meshes[{k}]"
+        check_type(path, mh, TriangleMesh)
+        check_name(f"{path}.name", mh.name)
         if mh.name in names:
-            raise SceneError(f"scene.meshes[{k}].name={mh.name!r} is used twice; give each wall its own name")
+            raise SceneError(f"{path}.name={mh.name!r} is used twice; give each wall its own name")
         names.add(mh.name)
         try:
             v = np.asarray(mh.vertices, dtype=np.float64)
-            t = np.asarray(mh.triangles)
         except (TypeError, ValueError):
-            raise SceneError(f"scene.meshes[{k}]: vertices and triangles must be numeric arrays") from None
+            raise SceneError(f"{path}.vertices={mh.vertices!r} is not an array of numbers; give (nv, 3) "
+                             "coordinates") from None
         if v.ndim != 2 or v.shape[1] != 3 or not np.all(np.isfinite(v)):
-            raise SceneError(f"scene.meshes[{k}].vertices has shape {v.shape} or non-finite values; give (nv, 3) "
-                             "finite coordinates")
+            raise SceneError(f"{path}.vertices has shape {v.shape} or non-finite values; give (nv, 3) finite "
+                             "coordinates")
+        t = np.asarray(mh.triangles)
         if t.ndim != 2 or t.shape[1] != 3 or t.shape[0] == 0 or not np.issubdtype(t.dtype, np.integer):
-            raise SceneError(f"scene.meshes[{k}].triangles has shape {t.shape} (dtype {t.dtype}); give (nt, 3) "
-                             "integer vertex indices")
+            raise SceneError(f"{path}.triangles has shape {t.shape} (dtype {t.dtype}); give (nt, 3) integer "
+                             "vertex indices")
         if t.min() < 0 or t.max() >= len(v):
-            raise SceneError(f"scene.meshes[{k}].triangles index vertex {int(t.max())}; there are {len(v)} vertices")
+            raise SceneError(f"{path}.triangles index vertex {int(t.max())}; there are {len(v)} vertices")
         a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
         area2 = np.linalg.norm(np.cross(b - a, c - a), axis=1)
         if np.any(area2 <= 0):
-            raise SceneError(f"scene.meshes[{k}] triangle {int(np.argmax(area2 <= 0))} is degenerate (zero area); "
+            raise SceneError(f"{path}.triangles[{int(np.argmax(area2 <= 0))}] is degenerate (zero area); "
                              "remove it")
         if mh.material not in scene.materials:
-            raise SceneError(f"scene.meshes[{k}].material={mh.material!r} is not declared; add it to scene.materials")
-        for q, ph in enumerate(mh.phases):
-            if isinstance(ph.cycles, bool) or not isinstance(ph.cycles, (int, np.integer)) or ph.cycles < 0:
-                raise SceneError(f"scene.meshes[{k}].phases[{q}].cycles={ph.cycles!r}: give an integer >= 0")
-            _vector3(f"scene.meshes[{k}].phases[{q}].velocity", ph.velocity)
+            raise SceneError(f"{path}.material={mh.material!r} is not declared; add it to scene.materials")
+        _phases(f"{path}.phases", mh.phases)
+    check_items("scene.planes", scene.planes)
     for k, p in enumerate(scene.planes):
-        check_identifier("plane", p.name)
+        path = f"scene.planes[{k}]"
+        check_type(path, p, Plane)
+        check_name(f"{path}.name", p.name)
         if p.name in names:
-            raise SceneError(f"scene.planes[{k}].name={p.name!r} is used twice; give each plane its own name")
+            raise SceneError(f"{path}.name={p.name!r} is used twice; give each wall its own name")
         names.add(p.name)
-        _vector3(f"scene.planes[{k}].point", p.point)
-        nrm = _vector3(f"scene.planes[{k}].normal", p.normal)
-        if np.linalg.norm(nrm) == 0:
-            raise SceneError(f"scene.planes[{k}].normal={p.normal!r} is zero; give the direction of the "
-                             "spheres' side")
-        if p.material not in scene.materials:
-            raise SceneError(f"scene.planes[{k}].material={p.material!r} is not declared; add it to "
-                             "scene.materials")
-        for q, ph in enumerate(p.phases):
-            if isinstance(ph.cycles, bool) or not isinstance(ph.cycles, (int, np.integer)) or ph.cycles < 0:
-                raise SceneError(f"scene.planes[{k}].phases[{q}].cycles={ph.cycles!r}: give an integer >= 0")
-            _vector3(f"scene.planes[{k}].phases[{q}].velocity", ph.velocity)
+        _vector3(f"{path}.point", p.point)
+        _vector3(f"{path}.normal", p.normal, nonzero=True)
+        if not isinstance(p.material, str) or p.material not in scene.materials:
+            raise SceneError(f"{path}.material={p.material!r} is not declared; add it to scene.materials")
+        _phases(f"{path}.phases", p.phases)
         if p.servo is not None:
-            s = p.servo
-            _finite(f"scene.planes[{k}].servo.force", s.force, positive=True)
-            _finite(f"scene.planes[{k}].servo.gain", s.gain, positive=True)
-            _finite(f"scene.planes[{k}].servo.v_max", s.v_max, positive=True)
-            if isinstance(s.start, bool) or not isinstance(s.start, (int, np.integer)) or s.start < 0:
-                raise SceneError(f"scene.planes[{k}].servo.start={s.start!r}: give an integer step >= 0")
+            sv = p.servo
+            check_type(f"{path}.servo", sv, PlateServo)
+            check_number(f"{path}.servo.force", sv.force, gt=0.0, unit="force")
+            check_number(f"{path}.servo.gain", sv.gain, gt=0.0, unit="length/time")
+            check_number(f"{path}.servo.v_max", sv.v_max, gt=0.0, unit="length/time")
+            check_whole(f"{path}.servo.start", sv.start)
+    if scene.spheres is not None:
+        check_type("scene.spheres", scene.spheres, Spheres)
+    if scene.clumps is not None:
+        check_type("scene.clumps", scene.clumps, Clumps)

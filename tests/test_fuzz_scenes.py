@@ -295,3 +295,49 @@ def test_the_robustness_page_is_rendered_from_the_fuzz_results(tmp_path):
     assert "Corrupted engine outputs" in page and "liggghts" in page and "yade_out.json" in page
     assert "0 unhandled" in summary_line(root)
     assert render(tmp_path) is None and summary_line(tmp_path) == ""  # nothing run: no page
+
+
+# ----------------------------------------------------------------------------- 3D scenes (spheres, planes,
+# plates, meshes, clumps, the Hertz-Mindlin law): the same protocol, tests/scene_faults3d.py
+import scene_faults3d as sf3  # noqa: E402
+
+
+@pytest.mark.parametrize("category", sf3.CATEGORIES3D)
+@FUZZ
+@given(data=st.data())
+def test_every_invalid_3d_scene_is_refused_naming_its_field(category, data):
+    faults = [f for f in sf3.FAULTS3D if f.category == category]
+    f = data.draw(st.sampled_from(faults), label="fault")
+    scene, path, value = f.make(lambda seq: data.draw(st.sampled_from(list(seq))))
+    kind, msg = sf.classify(scene, path)
+    assert kind == "clear", (f.name, path, value, kind, msg)
+
+
+def test_the_3d_base_scene_is_valid():
+    """Negative control: without a fault the 3D base scene builds and runs."""
+    sim = build(sf3.base3d())
+    sim.run()
+    assert sim.step == sim.scene.n_steps
+
+
+def test_every_field_of_every_3d_scene_object_is_fuzzed_or_derived():
+    """The 3D catalogue breaks every field of the 3D scene objects, except the few listed with the reason."""
+    import random
+
+    rng = random.Random(0)
+    paths = set()
+    for f in sf3.FAULTS3D:
+        for _ in range(60):
+            paths.add(f.make(rng.choice)[1])
+    text = "\n".join(paths)
+    where = {"Scene3D": "scene.", "Spheres": "scene.spheres.", "Plane": "].", "PlanePhase": "].", "PlateServo": "servo.",
+             "TriangleMesh": "].", "Clumps": "clumps.", "Outputs3D": "outputs.", "HertzMindlinLaw": "]."}
+    derived = {
+        "Scene3D.damping", "Scene3D.contact_model",  # GlobalDamping and ContactModel: the 2D objects, fuzzed
+        # by tests/scene_faults.py and checked by the same methods
+        "Scene3D.description",  # free text, never used in a deck
+        "Clumps.y", "Clumps.z",  # the same per-entry and length check as Clumps.x (build3d._array)
+    }
+    missing = [fp for fp in sf3.field_paths3d()
+               if fp not in derived and where[fp.split(".")[0]] + fp.split(".")[1] not in text]
+    assert not missing, missing
