@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ..jit import njit
+from ..jit import njit, njit_inline
 from ..laws.base import law_energy3, law_force3
 
 OK = 0
@@ -379,6 +379,26 @@ def triangle_contacts(P, pairs, n, nw, tris):
     return cp, active
 
 
+@njit_inline
+def _apart(pairs, k, ovl):
+    """Pair k is not touching: clear its history and outputs; record ``ovl`` (its gap, <= 0)."""
+    for c in range(pairs.hist.shape[1]):
+        pairs.hist[k, c] = 0.0
+    pairs.fn[k] = 0.0
+    pairs.ft[k, 0] = 0.0
+    pairs.ft[k, 1] = 0.0
+    pairs.ft[k, 2] = 0.0
+    pairs.ovl[k] = ovl
+    pairs.slide[k] = 0
+
+
+@njit_inline
+def _point_velocity(P, i, arm, nx, ny, nz):
+    """Velocity of the point at ``arm`` × n from sphere i's centre: v + ω × (arm n)."""
+    return (P[i, 3] + arm * (P[i, 7] * nz - P[i, 8] * ny), P[i, 4] + arm * (P[i, 8] * nx - P[i, 6] * nz),
+            P[i, 5] + arm * (P[i, 6] * ny - P[i, 7] * nx))
+
+
 @njit
 def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio):
     """One pass over the pair list: contact forces and moments into sp.FM (force 0-2, moment 3-5;
@@ -409,23 +429,14 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             dist = math.sqrt(dx * dx + dy * dy + dz * dz)
             overlap = ri - dist
             if not tact[q] or dist == 0.0:
-                for c in range(hist.shape[1]):
-                    hist[k, c] = 0.0
-                pairs.fn[k] = 0.0
-                pairs.ft[k, 0] = 0.0
-                pairs.ft[k, 1] = 0.0
-                pairs.ft[k, 2] = 0.0
-                pairs.ovl[k] = min(overlap, 0.0)
-                pairs.slide[k] = 0
+                _apart(pairs, k, min(overlap, 0.0))
                 continue
             nx = dx / dist
             ny = dy / dist
             nz = dz / dist
             ai = ri - 0.5 * overlap
             aj = 0.0
-            vix = P[i, 3] + ai * (P[i, 7] * nz - P[i, 8] * ny)
-            viy = P[i, 4] + ai * (P[i, 8] * nx - P[i, 6] * nz)
-            viz = P[i, 5] + ai * (P[i, 6] * ny - P[i, 7] * nx)
+            vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
             vjx = planes.vel[w, 0]
             vjy = planes.vel[w, 1]
             vjz = planes.vel[w, 2]
@@ -442,13 +453,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             rs = ri + rj
             if d2 >= rs * rs:
                 if pairs.ovl[k] >= 0.0 or hist[k, 0] != 0.0 or hist[k, 1] != 0.0 or hist[k, 2] != 0.0:
-                    for c in range(hist.shape[1]):
-                        hist[k, c] = 0.0
-                    pairs.fn[k] = 0.0
-                    pairs.ft[k, 0] = 0.0
-                    pairs.ft[k, 1] = 0.0
-                    pairs.ft[k, 2] = 0.0
-                    pairs.slide[k] = 0
+                    _apart(pairs, k, -1.0)
                 pairs.ovl[k] = rs - math.sqrt(d2) if recording else -1.0
                 continue
             dist = math.sqrt(d2)
@@ -460,12 +465,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             ai = ri - 0.5 * overlap
             aj = rj - 0.5 * overlap
             # contact-point velocities: v + ω × arm (arm_i = ai n, arm_j = -aj n)
-            vix = P[i, 3] + ai * (P[i, 7] * nz - P[i, 8] * ny)
-            viy = P[i, 4] + ai * (P[i, 8] * nx - P[i, 6] * nz)
-            viz = P[i, 5] + ai * (P[i, 6] * ny - P[i, 7] * nx)
-            vjx = P[j, 3] - aj * (P[j, 7] * nz - P[j, 8] * ny)
-            vjy = P[j, 4] - aj * (P[j, 8] * nx - P[j, 6] * nz)
-            vjz = P[j, 5] - aj * (P[j, 6] * ny - P[j, 7] * nx)
+            vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
+            vjx, vjy, vjz = _point_velocity(P, j, -aj, nx, ny, nz)
             mi = P[i, 10]
             mj = P[j, 10]
             if P[j, 12] != 0.0:
@@ -486,20 +487,11 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                   + (P[i, 2] - planes.point[p, 2]) * nz)
             overlap = ri - h
             if overlap <= 0.0:
-                for c in range(hist.shape[1]):
-                    hist[k, c] = 0.0
-                pairs.fn[k] = 0.0
-                pairs.ft[k, 0] = 0.0
-                pairs.ft[k, 1] = 0.0
-                pairs.ft[k, 2] = 0.0
-                pairs.ovl[k] = overlap
-                pairs.slide[k] = 0
+                _apart(pairs, k, overlap)
                 continue
             ai = ri - 0.5 * overlap
             aj = 0.0
-            vix = P[i, 3] + ai * (P[i, 7] * nz - P[i, 8] * ny)
-            viy = P[i, 4] + ai * (P[i, 8] * nx - P[i, 6] * nz)
-            viz = P[i, 5] + ai * (P[i, 6] * ny - P[i, 7] * nx)
+            vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
             vjx = planes.vel[p, 0]
             vjy = planes.vel[p, 1]
             vjz = planes.vel[p, 2]
