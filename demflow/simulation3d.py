@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .contacts.spheres import carry_history, sphere_pairs
+from .scene import SceneError
 from .simulation import BlowUpError
 from .state3d import Pairs3, Records3
 from .stepping3d import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps3
@@ -123,6 +124,7 @@ class Simulation3D:
         saving the last good state."""
         if n_steps is None:
             n_steps = max(self.scene.n_steps - self.step, 0)
+        self._check_run_length(n_steps)
         target = self.step + int(n_steps)
         snaps = sorted(s for s in self.scene.outputs.snapshots if self.step <= s <= target)
         bar = None
@@ -174,6 +176,25 @@ class Simulation3D:
         if checkpoint is not None:
             self.save_checkpoint(checkpoint)
         return self
+
+    def _check_run_length(self, n_steps) -> None:
+        """Refuse up front a run whose records would not fit in memory (they grow with what is recorded,
+        chunk by chunk, not with n_steps), with the numbers."""
+        from .scene import MAX_WHOLE, check_whole
+        from .simulation import SNAPSHOT_BYTES_PER_DISC, memory_limit, recorded_steps
+
+        check_whole("run(n_steps)", n_steps, le=MAX_WHOLE - self.step)
+        every = int(self.scene.outputs.every)
+        per = 8 * (2 + 6 * self.n_planes + 5 + 1 + 1 + 2 + 6 * len(self.scene.outputs.track_spheres))
+        rows = recorded_steps(self.step, int(n_steps), every)
+        snaps = sum(1 for st in self.scene.outputs.snapshots if self.step <= st <= self.step + int(n_steps))
+        need = rows * per + snaps * self.n * SNAPSHOT_BYTES_PER_DISC
+        limit = memory_limit()
+        if need > limit:
+            raise SceneError(f"run(n_steps={n_steps}) would record {rows} rows of {per} bytes and {snaps} snapshots: "
+                             f"{need / 2 ** 30:.3g} GiB, over the {limit / 2 ** 30:.3g} GiB a run may hold (half of this "
+                             "machine's memory; DEMFLOW_MEMORY_LIMIT overrides it); record less often "
+                             "(scene.outputs.every) or shorten the run")
 
     def _keep_records(self, rec: Records3, count: int) -> None:
         if count:

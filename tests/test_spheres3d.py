@@ -322,3 +322,13 @@ def test_servo_plate_holds_its_target_force():
     E = effective_modulus(4.8e10, 0.2, 2e11, 0.3)
     delta = (F / (4 / 3 * E * math.sqrt(R))) ** (2 / 3)
     assert sim.pairs.ovl.max() == pytest.approx(delta, rel=1e-3)
+
+
+def test_a_3d_run_too_long_to_record_is_refused_up_front():
+    sc = _stack(n=3, name="stack-long")
+    sim = df.build(sc)
+    with pytest.raises(df.SceneError, match="record less often"):
+        sim.run(10 ** 15)
+    with pytest.raises(df.SceneError, match="run\\(n_steps\\)"):
+        sim.run(-5)
+    assert sim.step == 0
