@@ -237,11 +237,13 @@ def main(argv=None):
     p.add_argument("--steps", type=int, nargs="+", default=None,
                    help="S per size (the runs are S and 2S steps); default max(20, 3e6/N): 300 at 1e4, 30 at 1e5")
     p.add_argument("--rounds", type=int, default=3, help="timing rounds (best reported)")
-    p.add_argument("--liggghts-factor", type=int, default=3,
-                   help="LIGGGHTS runs factor x S and 2 x factor x S steps (it is the fastest: a timed part of a "
-                        "few seconds)")
+    p.add_argument("--liggghts-factor", type=int, default=1,
+                   help="LIGGGHTS runs factor x S and 2 x factor x S steps (default 1: the same steps, the same "
+                        "state of the packing, as the other engines)")
     p.add_argument("--engines", nargs="+", default=list(ENGINE_ORDER), choices=ALL_ENGINES)
     p.add_argument("--timeout", type=float, default=900.0, help="per engine subprocess [s]")
+    p.add_argument("--yade-max", type=int, default=None,
+                   help="run YADE only at sizes up to this N (its start-up at 1e5 spheres took > 7 min here)")
     p.add_argument("--notes", default="", help="free text for the report (e.g. the machine's load)")
     p.add_argument("--out", default=str(Path(__file__).resolve().parent / "results"))
     p.add_argument("--tag", default="engines3d_speed")
@@ -257,7 +259,8 @@ def main(argv=None):
     rows = []
     for k, n in enumerate(a.sizes):
         S = a.steps[min(k, len(a.steps) - 1)] if a.steps else max(20, int(round(3e6 / n)))
-        rows.append(bench_size(n, S, a.rounds, a.timeout, a.engines, a.liggghts_factor))
+        engines = [e for e in a.engines if not (e == "yade" and a.yade_max is not None and n > a.yade_max)]
+        rows.append(bench_size(n, S, a.rounds, a.timeout, engines, a.liggghts_factor))
 
     def _ver(f):
         try:
