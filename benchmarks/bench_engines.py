@@ -115,9 +115,10 @@ def _liggghts_neighbor_builds(d):
 class ExternalRunner:
     """Decks for S and 2S steps written once; each call times one subprocess run."""
 
-    def __init__(self, engine, scene, S, root, timeout):
+    def __init__(self, engine, scene, S, root, timeout, E=None):
+        """``E``: the engine object writing the decks (default the 2D LIGGGHTS or YADE engine)."""
         self.engine, self.timeout = engine, timeout
-        self.E = LiggghtsEngine() if engine == "liggghts" else YadeEngine()
+        self.E = E or (LiggghtsEngine() if engine == "liggghts" else YadeEngine())
         self.E.path()
         self.dirs = {}
         for k in (1, 2):

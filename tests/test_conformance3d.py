@@ -433,3 +433,50 @@ def test_live_conformance_case_passes():
     p = case.merged()
     checks = case.checks(case.run(p), p)
     assert all(c.passed for c in checks), [(c.name, c.value) for c in checks if not c.passed]
+
+
+def test_benchmark_decks_record_nothing_and_read_atoms_from_a_data_file(tmp_path):
+    """Speed-run decks (benchmarks/bench_engines3d.py): YADE's fixed benchmark program with the conformance
+    deck's scene.json numbers and no PyRunner; LIGGGHTS above READ_DATA_ABOVE spheres reads a data file
+    (densities giving demflow's masses), the static floor of a periodic box is a primitive wall, nothing is
+    dumped; moving planes are refused by both benchmark decks."""
+    import sys
+    from importlib import resources
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from packing3d import dense_fcc
+
+    from demflow.engines.liggghts import READ_DATA_ABOVE
+
+    sc = dense_fcc(READ_DATA_ABOVE + 100)
+    sim = build(sc)
+    (tmp_path / "y").mkdir()
+    (tmp_path / "c").mkdir()
+    Yade3DEngine(benchmark=True).write_deck(sc, sim, tmp_path / "y")
+    Yade3DEngine().write_deck(sc, sim, tmp_path / "c")
+    program = (tmp_path / "y" / "deck.py").read_text()
+    assert program == resources.files("demflow.engines.decks").joinpath("yade_spheres3d_bench.py").read_text()
+    assert "PyRunner" not in program.split("O.engines")[1]
+    assert (tmp_path / "y" / "scene.json").read_bytes() == (tmp_path / "c" / "scene.json").read_bytes()
+    for v in json_leaves(json.loads((tmp_path / "y" / "scene.json").read_text())):
+        assert v is None or isinstance(v, (int, float, bool)) or re.fullmatch(r"[A-Za-z][A-Za-z0-9_\-|]*", v), v
+
+    lsc = _with_law(sc, shear_spring="total")
+    files = Liggghts3DEngine(benchmark=True).write_deck(lsc, build(lsc), tmp_path)
+    deck = (tmp_path / "deck.in").read_text()
+    assert "read_data spheres.data" in deck and "create_atoms" not in deck and "dump" not in deck
+    assert "primitive type 2 zplane 0.0" in deck and "boundary p p f" in deck
+    assert tmp_path / "spheres.data" in files
+    lines = (tmp_path / "spheres.data").read_text().splitlines()
+    atoms = np.array([[float(c) for c in ln.split()] for ln in lines[lines.index("Atoms") + 2:][:sim.n]])
+    mass = atoms[:, 3] * 4 / 3 * math.pi * (atoms[:, 2] / 2) ** 3
+    assert np.allclose(mass, sim.spheres.mass, rtol=1e-14, atol=0)
+    assert np.allclose(atoms[:, 4:7], sim.spheres.pos, rtol=0, atol=1e-18)
+
+    moving = scene("moving-plate", PARAMS)
+    with pytest.raises(EngineUnsupported, match="static"):
+        Yade3DEngine(benchmark=True).write_deck(moving, build(moving), tmp_path / "y")
+    with pytest.raises(EngineUnsupported, match="static"):
+        mv = _with_law(moving, shear_spring="total")
+        Liggghts3DEngine(benchmark=True).write_deck(mv, build(mv), tmp_path)

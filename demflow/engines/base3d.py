@@ -273,6 +273,15 @@ class Demflow3DEngine(DemflowEngine):
         return res, run
 
 
+class BenchmarkSummary(dict):
+    """What a benchmark deck reports after its run (steps, sphere_contacts, kinetic, ...), with the ``meta``
+    dict the engines' ``run`` fills in (engine, version)."""
+
+    def __init__(self, *a, **k):
+        super().__init__(*a, **k)
+        self.meta = {}
+
+
 def read_json_output(path: Path, engine: str) -> dict:
     """A deck's JSON output, refusing a missing, truncated or incomplete file."""
     from .base import EngineOutputError

@@ -23,6 +23,15 @@ table, :data:`demflow.engines.capabilities.FEATURES_3D`, row by row; the writer 
 - LIGGGHTS starts from v(0): the deck gives v(−Δt/2) + gΔt/2, exact when no contact acts at t = 0;
   the reader turns the on-step v_n, ω_n back into v_{n−1/2} = v_n − (Δt/2m) f_n,
   ω_{n−1/2} = ω_n − Δt t_n /(2·0.4 m r²) — the operations of ``fix nve/sphere``.
+- above ``READ_DATA_ABOVE`` (1000) spheres the atoms, their densities and velocities come from a data
+  file (``spheres.data``, ``read_data``: O(N); one ``create_atoms single`` + ``set atom`` per sphere is
+  O(N²)); smaller scenes keep the per-atom commands (the stored conformance decks are unchanged).
+
+``benchmark=True`` (speed runs, ``benchmarks/bench_engines3d.py``): nothing is dumped or printed during
+the run; static planes with an axis normal are primitive walls (``fix wall/gran ... primitive type T
+zplane z``, reff = R as for the mesh), which also works in a periodic box; after the run the thermo line
+gives the kinetic energy and the touching sphere-sphere contacts (``compute contact/atom``), read by
+:func:`read_benchmark_output`.
 """
 from __future__ import annotations
 
@@ -33,9 +42,9 @@ import numpy as np
 
 from ..scene import check_identifier
 from .base import EngineOutputError, EngineUnsupported, atomic_json
-from .base3d import scene3d_numbers, touching_at_start, trajectory_from_arrays
+from .base3d import BenchmarkSummary, scene3d_numbers, touching_at_start, trajectory_from_arrays
 from .capabilities import FEATURES_3D, refuse_inexpressible
-from .liggghts import LiggghtsEngine, _read_local  # _read_local: the 2D reader's LAMMPS dump parser
+from .liggghts import READ_DATA_ABOVE, LiggghtsEngine, _read_local  # _read_local: the 2D reader's dump parser
 
 RIGID_MODULUS = 1e300  # a rigid plane's Young's modulus in LIGGGHTS (compliance (1 − ν²)/E ≈ 1e-300)
 ZETA_MAX = math.sqrt(5.0 / 6.0)  # LIGGGHTS's ζ = √(5/6)|β| < √(5/6) for any 0 < e ≤ 1
@@ -92,9 +101,67 @@ def _stl(path: Path, point, normal, half: float):
     return np.array(verts)
 
 
+def _write_data3d(path: Path, S, tid, nt, lo, hi, half_g):
+    """LAMMPS data file (atom_style granular, 3D): id type diameter density x y z; velocities
+    vx vy vz ωx ωy ωz (v(−Δt/2) + half_g·g, as the per-atom deck gives them).  Numbers only (:func:`_f`)."""
+    D = S["spheres"]
+    g = S["gravity"]
+    n = int(S["n_spheres"])
+    out = ["demflow spheres (LIGGGHTS data file, atom_style granular)", "",
+           f"{n} atoms", f"{int(nt)} atom types", "",
+           f"{_f(lo[0])} {_f(hi[0])} xlo xhi", f"{_f(lo[1])} {_f(hi[1])} ylo yhi", f"{_f(lo[2])} {_f(hi[2])} zlo zhi",
+           "", "Atoms", ""]
+    for i in range(n):
+        r = D["r"][i]
+        rho = D["mass"][i] / (4.0 * math.pi / 3.0 * r ** 3)
+        out.append(f"{i + 1} {tid[D['material'][i]]} {_f(2 * r)} {_f(rho)} {_f(D['x'][i])} {_f(D['y'][i])} "
+                   f"{_f(D['z'][i])}")
+    out += ["", "Velocities", ""]
+    for i in range(n):
+        v = [D[c][i] + half_g * g[a] for a, c in enumerate(("vx", "vy", "vz"))]
+        out.append(f"{i + 1} {_f(v[0])} {_f(v[1])} {_f(v[2])} {_f(D['wx'][i])} {_f(D['wy'][i])} {_f(D['wz'][i])}")
+    path.write_text("\n".join(out) + "\n")
+
+
+def _primitive(pl):
+    """('xplane'|'yplane'|'zplane', offset) of a static plane with an axis normal, else None."""
+    nrm = [float(c) for c in pl["normal"]]
+    if any(c != 0.0 for ph in pl["phases"] for c in ph["v"]) or sorted(abs(c) for c in nrm) != [0.0, 0.0, 1.0]:
+        return None
+    a = [abs(c) for c in nrm].index(1.0)
+    return "xyz"[a] + "plane", float(pl["point"][a])
+
+
+def read_benchmark_output(outdir: Path) -> dict:
+    """The benchmark deck's summary from log.liggghts: steps, kinetic energy and touching sphere-sphere
+    contacts (compute contact/atom counts each contact once per atom: half its sum) after the run."""
+    log = Path(outdir) / "log.liggghts"
+    text = log.read_text(errors="replace") if log.exists() else ""
+    if "DEMFLOW-COMPLETE" not in text:
+        raise EngineOutputError(f"LIGGGHTS did not complete (no completion mark in {log}); rerun the engine")
+    last, header = None, None
+    for line in text.splitlines():
+        w = line.split()
+        if w[:2] == ["Step", "Atoms"]:
+            header = w
+        elif header and len(w) == len(header):
+            try:
+                last = dict(zip(header, (float(c) for c in w)))
+            except ValueError:
+                header = None
+        else:
+            header = None if line.startswith("Loop time") else header
+    if last is None:
+        raise EngineOutputError(f"no thermo output in {log}")
+    return BenchmarkSummary(steps=int(last["Step"]), kinetic=last["KinEng"], sphere_contacts=0.5 * last["csum"])
+
+
 class Liggghts3DEngine(LiggghtsEngine):
     """LIGGGHTS on a :class:`~demflow.scene3d.Scene3D` (module docstring); the executable, version and
-    command line are the 2D engine's."""
+    command line are the 2D engine's.  ``benchmark=True``: the speed-run deck (module docstring)."""
+
+    def __init__(self, benchmark: bool = False):
+        self.benchmark = benchmark
 
     def write_deck(self, scene, sim, deckdir: Path):
         check_identifier("scene", scene.name)  # before any message or file names it
@@ -150,10 +217,16 @@ class Liggghts3DEngine(LiggghtsEngine):
         hi = x.max(axis=0) + travel
         half = float(np.max(hi - lo))
         b = S["box"]
-        if S["planes"] and (b["periodic_x"] or b["periodic_y"]):
+        prim = [_primitive(pl) for pl in S["planes"]] if self.benchmark else [None] * len(S["planes"])
+        if self.benchmark and None in prim:
+            raise EngineUnsupported("the LIGGGHTS benchmark deck has static axis-aligned planes only (primitive "
+                                    "walls); run a scene with other planes with benchmark=False")
+        if S["planes"] and (b["periodic_x"] or b["periodic_y"]) and not self.benchmark:
             raise EngineUnsupported("the LIGGGHTS 3D deck has no planes in a periodic box (capabilities feature "
                                     "'walls-3d'); run YADE or make the box open")
         for k, pl in enumerate(S["planes"]):
+            if prim[k]:
+                continue
             verts = _stl(deckdir / f"w{k}.stl", pl["point"], pl["normal"], half)
             disp = np.zeros(3)
             lo_m, hi_m = verts.min(axis=0), verts.max(axis=0)
@@ -170,12 +243,20 @@ class Liggghts3DEngine(LiggghtsEngine):
                 lo[a] = b[f"{key}0"]
                 hi[a] = b[f"{key}0"] + b[f"l{key}"]
         touching = touching_at_start(sim)
+        # LIGGGHTS starts from v(0) = v(-dt/2) + (F(0)/m) dt/2; with no contact at t = 0, F(0) = m g
+        half_g = 0.0 if touching else 0.5 * dt
+        big = n > READ_DATA_ABOVE
         L = [
             "# demflow deck for LIGGGHTS-PUBLIC 3.8.0: 3D spheres, Hertz-Mindlin, planes with prescribed translation",
             "atom_style granular", "atom_modify map array sort 0 0", "dimension 3", f"boundary {' '.join(bnd)}",
-            "newton off", "communicate single vel yes", "units si", "hard_particles yes",
-            f"region box block {_f(lo[0])} {_f(hi[0])} {_f(lo[1])} {_f(hi[1])} {_f(lo[2])} {_f(hi[2])} units box",
-            f"create_box {nt} box",
+            "newton off", "communicate single vel yes", "units si", "hard_particles yes"]
+        if big:  # box, atoms, densities and velocities from a data file: O(N)
+            _write_data3d(deckdir / "spheres.data", S, tid, nt, lo, hi, half_g)
+            L.append("read_data spheres.data")
+        else:  # small scenes keep the per-atom commands (the stored conformance decks hold them)
+            L += [f"region box block {_f(lo[0])} {_f(hi[0])} {_f(lo[1])} {_f(hi[1])} {_f(lo[2])} {_f(hi[2])} units box",
+                  f"create_box {nt} box"]
+        L += [
             f"neighbor {_f(S['skin'])} bin", "neigh_modify delay 0",
             f"fix m1 all property/global youngsModulus peratomtype {E}",
             f"fix m2 all property/global poissonsRatio peratomtype {nu}",
@@ -184,24 +265,26 @@ class Liggghts3DEngine(LiggghtsEngine):
         ]
         opts = "limitForce on" + (" tangential_damping off" if tdamp == {"off"} else "")
         L += [f"pair_style gran model hertz tangential history {opts}", "pair_coeff * *", f"timestep {_f(dt)}"]
-        # LIGGGHTS starts from v(0) = v(-dt/2) + (F(0)/m) dt/2; with no contact at t = 0, F(0) = m g
-        half_g = 0.0 if touching else 0.5 * dt
-        for i in range(n):
+        for i in range(0 if big else n):
             L.append(f"create_atoms {tid[D['material'][i]]} single {_f(x[i, 0])} {_f(x[i, 1])} {_f(x[i, 2])} units box")
-        for i in range(n):
+        for i in range(0 if big else n):
             rho = D["mass"][i] / (4.0 * math.pi / 3.0 * r[i] ** 3)
             v = [D[c][i] + half_g * g[a] for a, c in enumerate(("vx", "vy", "vz"))]
             L.append(f"set atom {i + 1} diameter {_f(2 * r[i])} density {_f(rho)} vx {_f(v[0])} vy {_f(v[1])} "
                      f"vz {_f(v[2])} omegax {_f(D['wx'][i])} omegay {_f(D['wy'][i])} omegaz {_f(D['wz'][i])}")
         meshes = []
         for k, pl in enumerate(S["planes"]):
+            if prim[k]:
+                L.append(f"fix p{k} all wall/gran model hertz tangential history primitive type {tid[pl['material']]} "
+                         f"{prim[k][0]} {_f(prim[k][1])} {opts}")
+                continue
             L.append(f"fix w{k} all mesh/surface/stress file w{k}.stl type {tid[pl['material']]}")
             meshes.append(f"w{k}")
         if meshes:
             L.append(f"fix walls all wall/gran model hertz tangential history mesh n_meshes {len(meshes)} "
                      f"meshes {' '.join(meshes)} {opts}")
         for k, pl in enumerate(S["planes"]):
-            if not pl["phases"]:
+            if not pl["phases"] or prim[k]:
                 continue
             s0 = 0
             terms = [[], [], []]
@@ -227,6 +310,16 @@ class Liggghts3DEngine(LiggghtsEngine):
             gn = float(np.linalg.norm(g))
             L.append(f"fix grav all gravity {_f(gn)} vector {_f(g[0] / gn)} {_f(g[1] / gn)} {_f(g[2] / gn)}")
         L.append("fix integr all nve/sphere")
+        if self.benchmark:  # nothing recorded during the run; after it, KE and touching contacts
+            L += ["compute cn all contact/atom", "compute csum all reduce sum c_cn",
+                  "thermo_style custom step atoms ke c_csum", "thermo 0", f"run {int(S['n_steps'])}",
+                  'print "DEMFLOW-COMPLETE"']
+            S["liggghts"] = dict(types=types, boundary=bnd, lo=lo.tolist(), hi=hi.tolist(), touching_at_start=touching,
+                                 tangential_damping=sorted(tdamp), benchmark=True)
+            deck = deckdir / "deck.in"
+            deck.write_text("\n".join(L) + "\n")
+            atomic_json(deckdir / "scene.json", S)
+            return [deck, deckdir / "scene.json"] + ([deckdir / "spheres.data"] if big else [])
         every = S["every"]
         cols = []
         for k in range(len(meshes)):
@@ -245,9 +338,12 @@ class Liggghts3DEngine(LiggghtsEngine):
         deck = deckdir / "deck.in"
         deck.write_text("\n".join(L) + "\n")
         atomic_json(deckdir / "scene.json", S)
-        return [deck, deckdir / "scene.json"] + [deckdir / f"w{k}.stl" for k in range(len(meshes))]
+        return ([deck, deckdir / "scene.json"] + [deckdir / f"w{k}.stl" for k in range(len(meshes))]
+                + ([deckdir / "spheres.data"] if big else []))
 
     def read(self, scene, sim, outdir: Path):
+        if self.benchmark:
+            return read_benchmark_output(outdir)
         import json
 
         outdir = Path(outdir)
@@ -291,4 +387,4 @@ class Liggghts3DEngine(LiggghtsEngine):
         return res
 
 
-__all__ = ["Liggghts3DEngine", "restitution_for_zeta"]
+__all__ = ["Liggghts3DEngine", "read_benchmark_output", "restitution_for_zeta"]

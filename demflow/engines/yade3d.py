@@ -16,6 +16,11 @@ through it what YADE cannot express):
   reference radii = R, so R* = R/2) gives demflow's kno and kso exactly (:func:`wall_material`);
   ``compensate_walls=False`` writes the plane's own material instead (YADE's R/2 wall, measured);
 - planes move with their prescribed velocity, set before the InteractionLoop of each step.
+
+``benchmark=True`` (speed runs, ``benchmarks/bench_engines3d.py``) writes the same ``scene.json`` with
+the fixed program ``decks/yade_spheres3d_bench.py``: no PyRunner during the steps (static planes only;
+moving ones are refused) and, after the run, only contact counts, kinetic energy and plane forces
+(:func:`read_benchmark_output`).  The conformance decks are unchanged.
 """
 from __future__ import annotations
 
@@ -27,7 +32,7 @@ import numpy as np
 
 from ..scene import check_identifier
 from .base import EngineUnsupported, atomic_json
-from .base3d import read_json_output, scene3d_numbers, trajectory_from_arrays
+from .base3d import BenchmarkSummary, read_json_output, scene3d_numbers, trajectory_from_arrays
 from .capabilities import FEATURES_3D, refuse_inexpressible
 from .yade import YadeEngine
 
@@ -69,21 +74,32 @@ def sphere_pair_stiffness(p, m) -> None:
                                 f"{p['Estar']}, {p['Gstar']}")
 
 
+def read_benchmark_output(path: Path) -> dict:
+    """The benchmark deck's summary (steps, sphere_contacts, plane_contacts, kinetic, planes), refusing a
+    missing or incomplete file."""
+    return BenchmarkSummary(read_json_output(Path(path), "YADE"))
+
+
 class Yade3DEngine(YadeEngine):
     """YADE on a :class:`~demflow.scene3d.Scene3D` (module docstring); the executable, version and command
     line are the 2D engine's.  ``compensate_walls=False`` writes YADE's own box (R* = R/2) and
     ``avoid_ratcheting=True`` YADE's default sphere-sphere geometry: both only to measure them."""
 
     deck = "yade_spheres3d.py"
+    bench_deck = "yade_spheres3d_bench.py"
 
-    def __init__(self, compensate_walls: bool = True, avoid_ratcheting: bool = False):
+    def __init__(self, compensate_walls: bool = True, avoid_ratcheting: bool = False, benchmark: bool = False):
         self.compensate_walls = compensate_walls
         self.avoid_ratcheting = avoid_ratcheting
+        self.benchmark = benchmark
 
     def write_deck(self, scene, sim, deckdir: Path):
         check_identifier("scene", scene.name)  # before any message or file names it
         refuse_inexpressible(self.name, scene, FEATURES_3D)
         S = scene3d_numbers(scene, sim)
+        if self.benchmark and any(any(c != 0.0 for ph in pl["phases"] for c in ph["v"]) for pl in S["planes"]):
+            raise EngineUnsupported("YADE's benchmark deck has static planes only (no PyRunner during the steps); "
+                                    "run a scene with moving planes with benchmark=False")
         M = S["materials"]
         ym, pairs = {}, []
         for p in S["sphere_pairs"]:
@@ -138,10 +154,13 @@ class Yade3DEngine(YadeEngine):
         S["compensate_walls"] = bool(self.compensate_walls)
         atomic_json(deckdir / "scene.json", S)
         deck = deckdir / "deck.py"
-        deck.write_text(resources.files("demflow.engines.decks").joinpath(self.deck).read_text())
+        program = self.bench_deck if self.benchmark else self.deck
+        deck.write_text(resources.files("demflow.engines.decks").joinpath(program).read_text())
         return [deck, deckdir / "scene.json"]
 
     def read(self, scene, sim, outdir: Path):
+        if self.benchmark:
+            return read_benchmark_output(Path(outdir) / "yade_out.json")
         out = read_json_output(Path(outdir) / "yade_out.json", "YADE")
         rec = out["rec"]
         res = trajectory_from_arrays(sim, "yade", rec["sphere_steps"], rec["spheres"], rec["plane_steps"],
