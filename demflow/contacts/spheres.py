@@ -414,7 +414,10 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     energy = 0.0
     status = 0
     nw = planes.point.shape[0]
-    tcp, tact = triangle_contacts(P, pairs, n, nw, tris)
+    if tris.v.shape[0]:
+        tcp, tact = triangle_contacts(P, pairs, n, nw, tris)
+    else:
+        tcp, tact = np.empty((0, 3)), np.empty(0, np.int8)
     q = -1
     for k in range(pairs.i.shape[0]):
         i = pairs.i[k]
@@ -452,7 +455,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             d2 = dx * dx + dy * dy + dz * dz
             rs = ri + rj
             if d2 >= rs * rs:
-                if pairs.ovl[k] >= 0.0 or hist[k, 0] != 0.0 or hist[k, 1] != 0.0 or hist[k, 2] != 0.0:
+                if pairs.ovl[k] >= 0.0:  # touching last step (or listed anew): clear it once
                     _apart(pairs, k, -1.0)
                 pairs.ovl[k] = rs - math.sqrt(d2) if recording else -1.0
                 continue
