@@ -353,7 +353,9 @@ class Liggghts3DEngine(LiggghtsEngine):
                                     "the output is truncated; rerun the engine")
         S = json.loads((outdir / "scene.json").read_text())
         try:
-            dumps = _read_local(outdir / "spheres.txt", 21, atoms=True)
+            # the dump is written at step 0 and every ``every`` steps after it
+            dumps = _read_local(outdir / "spheres.txt", 21, np.arange(0, int(S["n_steps"]) + 1, int(S["every"])),
+                                {0: sim.n}, atoms=sim.n)
             planes = np.loadtxt(outdir / "planes.txt", ndmin=2) if sim.n_planes else np.zeros((0, 1))
         except (OSError, ValueError) as e:
             raise EngineOutputError(f"LIGGGHTS output in {outdir} is missing or truncated ({e}); rerun the engine") from None

@@ -197,8 +197,10 @@ def _array(f: Path, where: str, v, shape) -> np.ndarray:
         a = np.array(v, dtype=float)
     except (TypeError, ValueError, OverflowError):
         raise _bad(f, where, "is not a regular array of numbers") from None
-    if a.size == 0 and len(shape) > 1 and shape[0] in (-1, 0):
-        a = a.reshape(0, *shape[1:]) if -1 not in shape[1:] else a
+    if a.size == 0 and a.ndim < len(shape) and -1 not in shape[a.ndim:] \
+            and all(s in (-1, t) for s, t in zip(shape, a.shape)):
+        # an empty list nests no deeper than its first empty level: [] for (0, 3), [[], ...] for (R, 0, 2)
+        a = a.reshape(*a.shape, *shape[a.ndim:])
     if a.ndim != len(shape) or any(s not in (-1, t) for s, t in zip(shape, a.shape)):
         raise _bad(f, where, f"has shape {a.shape}, expected {tuple('any' if s == -1 else s for s in shape)}")
     if not np.all(np.isfinite(a)):
