@@ -290,9 +290,17 @@ def read_json_output(path: Path, engine: str) -> dict:
         raise EngineOutputError(f"{engine} wrote no output ({path} missing); see {path.parent / 'engine.log'}")
     try:
         out = json.loads(path.read_text())
-    except json.JSONDecodeError as e:
+    except (OSError, ValueError, RecursionError) as e:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
         raise EngineOutputError(f"{engine} output {path} is truncated or corrupt ({e}); rerun the engine") from None
-    if not out.get("complete"):
+    if not (isinstance(out, dict) and out.get("complete") is True):
         raise EngineOutputError(f"{engine} output {path} is incomplete; rerun the engine")
     return out
+
+
+def recorded_steps(sim) -> tuple[np.ndarray, np.ndarray]:
+    """The steps a trajectory records (as :func:`demflow_trajectory` and the decks write them): sphere
+    states at 0, every, 2·every, ... up to n_steps; plane forces at 0, every, ... below n_steps."""
+    every = max(int(sim.scene.outputs.every), 1)
+    total = int(sim.scene.n_steps)
+    return np.arange(0, total + 1, every, dtype=np.int64), np.arange(0, total, every, dtype=np.int64)
 

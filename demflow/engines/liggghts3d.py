@@ -42,9 +42,9 @@ import numpy as np
 
 from ..scene import check_identifier
 from .base import EngineOutputError, EngineUnsupported, atomic_json
-from .base3d import BenchmarkSummary, scene3d_numbers, touching_at_start, trajectory_from_arrays
+from .base3d import BenchmarkSummary, recorded_steps, scene3d_numbers, touching_at_start, trajectory_from_arrays
 from .capabilities import FEATURES_3D, refuse_inexpressible
-from .liggghts import READ_DATA_ABOVE, LiggghtsEngine, _read_local  # _read_local: the 2D reader's dump parser
+from .liggghts import READ_DATA_ABOVE, LiggghtsEngine, _bad_output, _read_local, _read_rows  # the checked parsers
 
 RIGID_MODULUS = 1e300  # a rigid plane's Young's modulus in LIGGGHTS (compliance (1 − ν²)/E ≈ 1e-300)
 ZETA_MAX = math.sqrt(5.0 / 6.0)  # LIGGGHTS's ζ = √(5/6)|β| < √(5/6) for any 0 < e ≤ 1
@@ -351,41 +351,45 @@ class Liggghts3DEngine(LiggghtsEngine):
         if not log.exists() or "DEMFLOW-COMPLETE" not in log.read_text(errors="replace"):
             raise EngineOutputError(f"LIGGGHTS did not complete scene {scene.name!r} (no completion mark in {log}); "
                                     "the output is truncated; rerun the engine")
-        S = json.loads((outdir / "scene.json").read_text())
-        try:
-            # the dump is written at step 0 and every ``every`` steps after it
-            dumps = _read_local(outdir / "spheres.txt", 21, np.arange(0, int(S["n_steps"]) + 1, int(S["every"])),
-                                {0: sim.n}, atoms=sim.n)
-            planes = np.loadtxt(outdir / "planes.txt", ndmin=2) if sim.n_planes else np.zeros((0, 1))
-        except (OSError, ValueError) as e:
-            raise EngineOutputError(f"LIGGGHTS output in {outdir} is missing or truncated ({e}); rerun the engine") from None
-        lo, hi = np.asarray(S["liggghts"]["lo"]), np.asarray(S["liggghts"]["hi"])
+        try:  # the deck's own record of the scene (written by write_deck beside the deck)
+            S = json.loads((outdir / "scene.json").read_text())
+            lo, hi = (np.asarray(S["liggghts"][k], dtype=float) for k in ("lo", "hi"))
+            touching = S["liggghts"]["touching_at_start"]
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            raise EngineOutputError(f"LIGGGHTS deck record {outdir / 'scene.json'} is missing or corrupt ({e!r}); "
+                                    "rerun the engine") from None
+        if lo.shape != (3,) or hi.shape != (3,) or not np.all(np.isfinite(hi - lo)):
+            raise EngineOutputError(f"LIGGGHTS deck record {outdir / 'scene.json'}: box bounds lo/hi are not three "
+                                    "finite numbers each; rerun the engine")
+        steps, p_steps = recorded_steps(sim)
+        # the dump is written at step 0 and every ``every`` steps after it; each block lists atoms 1..n
+        dumps = _read_local(outdir / "spheres.txt", 21, steps, {0: sim.n}, atoms=sim.n)
         period = hi - lo
         dtf = 0.5 * sim.dt
-        steps, rows = [], []
-        for step in sorted(dumps):
-            d = dumps[step]
-            if d.shape[0] != sim.n:
-                raise EngineOutputError(f"LIGGGHTS spheres.txt step {step} has {d.shape[0]} atoms, not {sim.n} "
-                                        "(atoms lost: the domain is too small?)")
+        rows = []
+        for step in steps:
+            d = dumps[int(step)]
             d = d[np.argsort(d[:, 0])]
-            pos = d[:, 1:4] + d[:, 4:7] * period  # image flags are 0 along non-periodic axes
             m, rad = d[:, 19], d[:, 20]
+            if not (np.all(m > 0) and np.all(rad > 0)):
+                raise _bad_output(outdir / "spheres.txt", None, f"timestep {step}: a mass or radius is not positive")
+            pos = d[:, 1:4] + d[:, 4:7] * period  # image flags are 0 along non-periodic axes
             dtfm = dtf / m
-            v = d[:, 7:10] - dtfm[:, None] * d[:, 13:16]
+            v = d[:, 7:10] - dtfm[:, None] * d[:, 13:16]  # the dump's velocities are half a step ahead
             dtirot = (dtf / 0.4) / (rad * rad * m)
             w = d[:, 10:13] - dtirot[:, None] * d[:, 16:19]
-            steps.append(step)
             rows.append(np.concatenate([pos, v, w], axis=1))
-        if sim.n_planes:
-            if planes.shape[1] != 1 + 3 * sim.n_planes:
-                raise EngineOutputError(f"LIGGGHTS planes.txt has {planes.shape[1]} columns, not {1 + 3 * sim.n_planes}")
-            p_steps = planes[:, 0].astype(np.int64)
+        if sim.n_planes:  # fix print: steps every, 2·every, ... up to n_steps (the forces evaluated before them)
+            planes = _read_rows(outdir / "planes.txt", 1 + 3 * sim.n_planes)
+            if not np.array_equal(planes[:, 0], p_steps + max(int(sim.scene.outputs.every), 1)):
+                raise _bad_output(outdir / "planes.txt", None, f"it holds {planes.shape[0]} rows of steps "
+                                  f"{planes[:3, 0].tolist()}..., the deck prints {len(p_steps)}")
             p_rows = planes[:, 1:].reshape(-1, sim.n_planes, 3)
+            p_steps = planes[:, 0].astype(np.int64)  # LIGGGHTS's labels, kept as the stored references hold them
         else:
             p_steps, p_rows = np.zeros(0, np.int64), np.zeros((0, 0, 3))
         res = trajectory_from_arrays(sim, "liggghts", steps, rows, p_steps, p_rows)
-        res.meta.update(touching_at_start=S["liggghts"]["touching_at_start"])
+        res.meta.update(touching_at_start=touching)
         return res
 
 

@@ -32,9 +32,9 @@ import numpy as np
 
 from ..scene import check_identifier
 from .base import EngineUnsupported, atomic_json
-from .base3d import BenchmarkSummary, read_json_output, scene3d_numbers, trajectory_from_arrays
+from .base3d import BenchmarkSummary, read_json_output, recorded_steps, scene3d_numbers, trajectory_from_arrays
 from .capabilities import FEATURES_3D, refuse_inexpressible
-from .yade import YadeEngine
+from .yade import YadeEngine, _array, _bad, _entry
 
 
 def yade_moduli(Ea, nua, Eb, nub) -> tuple[float, float]:
@@ -161,9 +161,18 @@ class Yade3DEngine(YadeEngine):
     def read(self, scene, sim, outdir: Path):
         if self.benchmark:
             return read_benchmark_output(Path(outdir) / "yade_out.json")
-        out = read_json_output(Path(outdir) / "yade_out.json", "YADE")
-        rec = out["rec"]
-        res = trajectory_from_arrays(sim, "yade", rec["sphere_steps"], rec["spheres"], rec["plane_steps"],
-                                     rec["planes"] if sim.n_planes else np.zeros((len(rec["plane_steps"]), 0, 3)))
+        f = Path(outdir) / "yade_out.json"
+        out = read_json_output(f, "YADE")
+        rec = _entry(f, out, "rec", dict)
+        want_s, want_p = recorded_steps(sim)
+        got = {}
+        for key, want in (("sphere_steps", want_s), ("plane_steps", want_p)):
+            got[key] = _array(f, f"rec.{key}", _entry(f, rec, key, list), (-1,))
+            if not np.array_equal(got[key], want):
+                raise _bad(f, f"rec.{key}", f"records steps {got[key][:4].tolist()}... ({got[key].shape[0]}), the "
+                                            f"deck records {want[:4].tolist()}... ({want.shape[0]})")
+        spheres = _array(f, "rec.spheres", _entry(f, rec, "spheres", list), (len(want_s), sim.n, 9))
+        planes = _array(f, "rec.planes", _entry(f, rec, "planes", list), (len(want_p), sim.n_planes, 3))
+        res = trajectory_from_arrays(sim, "yade", want_s, spheres, want_p, planes)
         res.meta.update(compensate_walls=self.compensate_walls, avoid_ratcheting=self.avoid_ratcheting)
         return res
