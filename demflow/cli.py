@@ -21,33 +21,94 @@ def _parse_sets(items):
     return out
 
 
-def main(argv=None):
-    from .cases import CASES, comparison_cases, get_case, reference_cases
+def _write_vtk(res, outdir: Path) -> None:
+    from .vtk import write_results_vtk
 
-    ap = argparse.ArgumentParser(prog="demflow", description="2D DEM after Cundall & Strack and Tan (1990)")
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    sub.add_parser("cases", help="list the registered cases")
-    r = sub.add_parser("run", help="run one case and save its tables")
-    r.add_argument("case")
+    if not hasattr(res, "particles") or res.particles.empty:
+        print(f"no VTK for {outdir.parent.name}: the run kept no particle snapshots (add snapshot steps to the "
+              "scene's outputs)", file=sys.stderr)
+        return
+    files = write_results_vtk(res, outdir)
+    print(f"VTK: {outdir / 'run.pvd'} ({len(files) - 1} files)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: every command and option with its help text (``demflow --help``)."""
+    from .cases import comparison_cases, reference_cases
+
+    fmt = argparse.RawDescriptionHelpFormatter
+    ap = argparse.ArgumentParser(
+        prog="demflow", formatter_class=fmt,
+        description="Discrete element simulation of dry and saturated granular media (2D discs with a BEM "
+                    "Stokes fluid, 3D Hertz-Mindlin spheres and clumps), validated against its sources and "
+                    "against YADE and LIGGGHTS.",
+        epilog="examples:\n"
+               "  demflow cases                              list the cases and their parameters\n"
+               "  demflow run cs-photoelastic --set n_seeds=2 --vtk\n"
+               "  demflow validate                           the validation report (fast cases)\n"
+               "  demflow validate --case cs-photoelastic    refresh one case's page\n"
+               "  demflow reference cs-nine-disc --engine yade\n"
+               "  demflow compare cs-photoelastic --engines demflow,liggghts\n"
+               "Run 'demflow COMMAND --help' for a command's options.")
+    ap.add_argument("--no-progress", action="store_true",
+                    help="never show progress bars (by default a run longer than a few seconds shows one on a "
+                         "terminal, never in a log or a pipe)")
+    sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
+    sub.add_parser("cases", help="list the registered cases, their sources and default parameters",
+                   description="List every registered case: its name, what it reproduces, its source and its "
+                               "default parameters (override them with 'demflow run CASE --set KEY=VALUE').")
+    r = sub.add_parser("run", help="run one case, save its tables and figures, print its checks", formatter_class=fmt,
+                       description="Run one case with its default parameters (or overrides), save each variant's "
+                                   "result tables as parquet under OUT/VARIANT (load them with "
+                                   "demflow.results.Results.load), draw its figures into OUT and print its checks. "
+                                   "Exit status 0 when every counted check passes, 1 otherwise.")
+    r.add_argument("case", help="the case name ('demflow cases' lists them)")
     r.add_argument("--out", default=None, help="output directory (default runs/CASE)")
-    r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case parameter")
-    v = sub.add_parser("validate", help="run every validation case and write the report")
-    v.add_argument("--out", default="reports/validation")
-    v.add_argument("--case", action="append", help="only these cases")
-    v.add_argument("--all", action="store_true", help="include the slow cases (minutes of BEM each)")
-    rf = sub.add_parser("reference", help="run a real engine and store its reference run (reference_runs/)")
-    rf.add_argument("case", choices=list(reference_cases()))
-    rf.add_argument("--engine", required=True, choices=["yade", "liggghts"])
+    r.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a case parameter, e.g. --set dt=1e-4 (repeatable; values are Python "
+                        "literals, else strings)")
+    r.add_argument("--vtk", action="store_true",
+                   help="also write each variant's snapshots as VTK for ParaView (OUT/VARIANT/vtk/run.pvd: "
+                        "particles as points with radius and velocity, contacts as lines with fn, fs)")
+    v = sub.add_parser("validate", help="run the validation cases and write the HTML report",
+                       description="Run every validation case (by default those not marked slow) and write the "
+                                   "report: OUT/index.html, a page per case, and OUT/summary.json (strict JSON). "
+                                   "Checks are classified (source figure, exact, cross-code, self-consistency, "
+                                   "calibration, informative); only validation kinds count as passes. Cases not "
+                                   "run now keep their previous entry. Exit status 0 when every case passes.")
+    v.add_argument("--out", default="reports/validation", help="report directory (default reports/validation)")
+    v.add_argument("--case", action="append", metavar="CASE", help="only this case (repeatable)")
+    v.add_argument("--all", action="store_true", help="include the slow cases (minutes to hours each)")
+    rf = sub.add_parser("reference", help="run a real engine (YADE or LIGGGHTS) and store its reference run",
+                        description="Write a case's decks for a real engine, run it, read and check its output, and "
+                                    "store the tables with provenance (deck, log, versions, hashes) under "
+                                    "reference_runs/CASE/VARIANT/ENGINE/ (atomic: a failed run stores nothing). "
+                                    "Needs the engine installed (scripts/install-engines.sh).")
+    rf.add_argument("case", choices=list(reference_cases()), help="a case with engine reference runs")
+    rf.add_argument("--engine", required=True, choices=["yade", "liggghts"], help="which engine to run")
     rf.add_argument("--variant", action="append", help="only these variants (default: all the engine can express)")
-    rf.add_argument("--timeout", type=float, default=600.0)
+    rf.add_argument("--timeout", type=float, default=600.0, help="seconds one engine run may take (default 600)")
     rf.add_argument("--seal", action="store_true", help="do not run the engine: add meta.sha256 (the hash of meta.json) "
                                                         "to the stored references, after verifying their files")
-    cp = sub.add_parser("compare", help="compare engines on a case and write its comparison page")
-    cp.add_argument("case", choices=list(comparison_cases()))
-    cp.add_argument("--engines", default="demflow,yade,liggghts")
+    cp = sub.add_parser("compare", help="compare engines on a case and write its comparison page",
+                        description="Compare demflow with the engines on a cross-code case (from the stored "
+                                    "reference runs, or live with --live) and write the case's report page.")
+    cp.add_argument("case", choices=list(comparison_cases()), help="a case with a cross-code comparison")
+    cp.add_argument("--engines", default="demflow,yade,liggghts",
+                    help="comma-separated engines to compare (default demflow,yade,liggghts)")
     cp.add_argument("--live", action="store_true", help="run the engines now instead of using stored references")
-    cp.add_argument("--out", default="reports/validation")
-    args = ap.parse_args(argv)
+    cp.add_argument("--out", default="reports/validation", help="report directory (default reports/validation)")
+    return ap
+
+
+def main(argv=None):
+    from .cases import CASES, get_case
+
+    args = build_parser().parse_args(argv)
+    if args.no_progress:
+        from . import progress
+
+        progress.enable(False)
 
     if args.cmd == "cases":
         for name, c in CASES.items():
@@ -69,6 +130,8 @@ def main(argv=None):
         for variant, res in run.results.items():
             res.meta["case"], res.meta["variant"], res.meta["params"] = args.case, variant, p
             res.save(out / variant)
+            if args.vtk:
+                _write_vtk(res, out / variant / "vtk")
         checks = case.checks(run, p)
         figs = case.figures(run, p, str(out))
         for c in checks:
@@ -97,7 +160,9 @@ def main(argv=None):
         if bad:
             print(f"demflow: {args.engine} cannot run variant(s) {bad}; it runs {can}", file=sys.stderr)
             return 2
-        for v in variants:
+        from . import progress
+
+        for v in progress.iterate(variants, f"reference {args.case} ({args.engine})", "variant"):
             engine = plan.engine(args.engine, v) if plan.engine else get_engine(args.engine)
             try:
                 path = reference.generate(plan.store, v, engine, plan.scene(v, plan.params), params=plan.params,

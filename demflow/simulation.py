@@ -137,6 +137,7 @@ class Simulation:
     """
 
     CHUNK = 20000  # steps between last-good-state copies
+    _bar = None  # the progress bar of the run in progress (set by run, see demflow.progress)
     # Below this many discs a step is too short to share between threads: on this 2-core
     # machine the nine-disc test ran 65× slower on 2 threads than on 1 (4.06 s vs 0.063 s,
     # 9040 steps); benchmarks/results/crossover.md: 2 threads pay off above ~4000 discs
@@ -304,17 +305,26 @@ class Simulation:
 
     # ------------------------------------------------------------------ running
     def run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
-            checkpoint_every: int | None = None, threads: int | None = None) -> "Simulation":
+            checkpoint_every: int | None = None, threads: int | None = None,
+            progress: bool | None = None) -> "Simulation":
         """See :meth:`_run`; ``threads`` (default: 1 below PARALLEL_MIN_DISCS discs, else all
-        set by :func:`demflow.jit.set_threads`) only changes speed, never results."""
+        set by :func:`demflow.jit.set_threads`) only changes speed, never results.  ``progress``: a
+        bar (True), none (False), or :mod:`demflow.progress`'s rule (None: on a terminal, after a few
+        seconds)."""
         import numba
+
+        from .progress import bar as progress_bar
 
         before = numba.get_num_threads()
         want = threads or (1 if self.n < self.PARALLEL_MIN_DISCS else before)
         numba.set_num_threads(min(want, numba.config.NUMBA_NUM_THREADS))
+        total = max(int(self.scene.n_steps) - self.step, 0) if n_steps is None else n_steps
         try:
-            return self._run(n_steps, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+            with progress_bar(total if isinstance(total, int) else 0, self.scene.name, show=progress) as bar:
+                self._bar = bar
+                return self._run(n_steps, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
         finally:
+            self._bar = None
             numba.set_num_threads(before)
 
     def _run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
@@ -370,6 +380,8 @@ class Simulation:
                     rec, rec_count, self.external_force, self.has_external_force)
                 self.dem_s += time.perf_counter() - t_dem
                 self.step += done
+                if self._bar is not None:
+                    self._bar.update(done)
                 # BLOWUP: an overlap, jump or contact force test failed; NONFINITE: the state on return holds
                 # a NaN or inf no contact saw (a disc in free flight under a NaN gravity or external force, a
                 # wall driven to infinity), found by one O(n) pass per call of the cycle, per chunk or

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .contacts.spheres import carry_history, sphere_pairs
+from .progress import bar as progress_bar
 from .scene import SceneError
 from .simulation import BlowUpError
 from .state3d import Pairs3, Records3
@@ -114,65 +115,60 @@ class Simulation3D:
                         contacts=np.zeros(nrec, np.int64), peak=np.zeros((nrec, 2)), track_ids=ids, track=np.zeros((nrec, ids.size, 6)))
 
     def run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
-            checkpoint_every: int | None = None, progress: bool = False) -> "Simulation3D":
+            checkpoint_every: int | None = None, progress: bool | None = None) -> "Simulation3D":
         """Advance ``n_steps`` steps (default: the scene's n_steps minus steps done).
 
         Records are kept every ``scene.outputs.every`` steps (memory grows with what is recorded,
         chunk by chunk, not with the run length).  With ``checkpoint`` a resumable state is written
         atomically every ``checkpoint_every`` steps and at the end.  A blow-up (an overlap beyond
         half a radius, a step beyond half a radius, a non-finite force) raises BlowUpError after
-        saving the last good state."""
+        saving the last good state.  ``progress``: a bar (True), none (False), or
+        :mod:`demflow.progress`'s rule (None: on a terminal, after a few seconds)."""
         if n_steps is None:
             n_steps = max(self.scene.n_steps - self.step, 0)
         self._check_run_length(n_steps)
+        with progress_bar(int(n_steps), self.scene.name, show=progress) as bar:
+            return self._run(n_steps, checkpoint, checkpoint_every, bar)
+
+    def _run(self, n_steps, checkpoint, checkpoint_every, bar) -> "Simulation3D":
         target = self.step + int(n_steps)
         snaps = sorted(s for s in self.scene.outputs.snapshots if self.step <= s <= target)
-        bar = None
-        if progress:
-            from tqdm.auto import tqdm
-
-            bar = tqdm(total=int(n_steps), desc=self.scene.name, unit="step")
         last_ckpt = self.step
-        try:
-            while True:
-                while snaps and snaps[0] == self.step:
-                    self.snapshot_now()
-                    snaps.pop(0)
-                if self.step >= target:
-                    break
-                stop = min(target, snaps[0] if snaps else target, self.step + self.CHUNK)
-                good = self._copy_state()
-                rec = self._new_records(stop - self.step)
-                rec_count = 0
-                while self.step < stop:
-                    t0 = time.perf_counter()
-                    done, status, rec_count = run_steps3(
-                        stop - self.step, self.step, self.skin, self.spheres, self.bodies, self.pairs, self.planes,
-                        self.tris, self.loading, self.law_params, self.g, self.damping, self.dt, rec, rec_count, self.work)
-                    self.dem_s += time.perf_counter() - t0
-                    self.step += done
-                    if bar is not None:
-                        bar.update(done)
-                    if status == BLOWUP:
-                        self._keep_records(rec, rec_count)
-                        bad = self.step
-                        self._restore_state(good)
-                        path = self._save_last_good()
-                        raise BlowUpError(
-                            f"scene {self.scene.name!r} blew up at step {bad}: a contact overlapped more than "
-                            f"{MAX_OVERLAP_RATIO:.0%} of a radius, a sphere moved more than {MAX_STEP_RATIO:.0%} "
-                            f"of its radius in one step, or a force became non-finite. Reduce dt (now "
-                            f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate. Last "
-                            f"good state (step {self.step}) saved to {path}", path)
-                    if status == REBUILD:
-                        self.rebuild()
-                self._keep_records(rec, rec_count)
-                if checkpoint is not None and checkpoint_every and self.step - last_ckpt >= checkpoint_every:
-                    self.save_checkpoint(checkpoint)
-                    last_ckpt = self.step
-        finally:
-            if bar is not None:
-                bar.close()
+        while True:
+            while snaps and snaps[0] == self.step:
+                self.snapshot_now()
+                snaps.pop(0)
+            if self.step >= target:
+                break
+            stop = min(target, snaps[0] if snaps else target, self.step + self.CHUNK)
+            good = self._copy_state()
+            rec = self._new_records(stop - self.step)
+            rec_count = 0
+            while self.step < stop:
+                t0 = time.perf_counter()
+                done, status, rec_count = run_steps3(
+                    stop - self.step, self.step, self.skin, self.spheres, self.bodies, self.pairs, self.planes,
+                    self.tris, self.loading, self.law_params, self.g, self.damping, self.dt, rec, rec_count, self.work)
+                self.dem_s += time.perf_counter() - t0
+                self.step += done
+                bar.update(done)
+                if status == BLOWUP:
+                    self._keep_records(rec, rec_count)
+                    bad = self.step
+                    self._restore_state(good)
+                    path = self._save_last_good()
+                    raise BlowUpError(
+                        f"scene {self.scene.name!r} blew up at step {bad}: a contact overlapped more than "
+                        f"{MAX_OVERLAP_RATIO:.0%} of a radius, a sphere moved more than {MAX_STEP_RATIO:.0%} "
+                        f"of its radius in one step, or a force became non-finite. Reduce dt (now "
+                        f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate. Last "
+                        f"good state (step {self.step}) saved to {path}", path)
+                if status == REBUILD:
+                    self.rebuild()
+            self._keep_records(rec, rec_count)
+            if checkpoint is not None and checkpoint_every and self.step - last_ckpt >= checkpoint_every:
+                self.save_checkpoint(checkpoint)
+                last_ckpt = self.step
         if checkpoint is not None:
             self.save_checkpoint(checkpoint)
         return self

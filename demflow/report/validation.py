@@ -18,6 +18,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+from .. import progress
 from ..cases import CASES  # noqa: E402
 from ..cases.base import INFO, counted, kind_counts, kind_of, validation_passes  # noqa: E402
 
@@ -82,7 +83,7 @@ def run_validation(names=None, outdir="reports/validation", overrides=None, case
             old = {}
     summary = dict(generated=time.strftime("%Y-%m-%d %H:%M:%S"), python=platform.python_version(),
                    machine=platform.machine(), cases={k: v for k, v in old.items() if k in CASES and k not in names})
-    for name in names:
+    for name in progress.iterate(names, "validate", "case"):
         case = cases[name]
         p = case.merged((overrides or {}).get(name))
         t0 = time.perf_counter()
