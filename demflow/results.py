@@ -98,8 +98,10 @@ class Results:
                 sliding=c["sliding"], overlap=c["overlap"])))
             w = s["walls"]
             walls.append(pd.DataFrame(dict(step=s["step"], wall=sim.wall_names, **w)))
+        from .manifest import physics_manifest
+
         meta = dict(engine="demflow", scene=sim.scene.name, dt=dt, dt_crit=sim.dt_crit, steps=sim.step,
-                    n_discs=sim.n, walls=sim.wall_names, rebuilds=sim.rebuilds)
+                    n_discs=sim.n, walls=sim.wall_names, rebuilds=sim.rebuilds, physics=physics_manifest(sim))
         fluid = {}
         if sim.fluid is not None:
             fc = sim.fluid

@@ -15,8 +15,10 @@ from dataclasses import dataclass
 #   cross-code        another code (YADE, LIGGGHTS) on the same scene
 #   self-consistency  an identity, a convergence or equilibrium property of demflow's own results
 #   calibration       a lost parameter was fitted to this very figure: its agreement is not validation
+#   miss              a source figure demflow does not reproduce: shown with its measured value and the
+#                     measured cause, never counted as a pass (nor as a failure of the case's claims)
 #   info              shown for comparison, never pass/fail
-KINDS = ("source", "exact", "cross-code", "self-consistency", "calibration", "info")
+KINDS = ("source", "exact", "cross-code", "self-consistency", "calibration", "miss", "info")
 VALIDATION_KINDS = ("source", "exact", "cross-code", "self-consistency")  # passes that count as validation
 
 
@@ -54,6 +56,11 @@ TOLERANCES = {
         "are reproduced to ≤ 5e-5 (measured); 1e-4 allows for the unknown Δt the thesis used.", kind="source"),
     "five-discs.weight-balance": Tolerance(
         1e-4, "Acceptance of issue 2: wall reactions sum to the total weight within 1e-4 (Table 2.3 text).", kind="self-consistency"),
+    "impact.rigid-body": Tolerance(
+        1e-2,
+        "Thesis §2.2.5.3: its Table 2.4 velocities are within 1 % of the rigid-body values (errors 0.27-0.93 %), "
+        "the source's stated accuracy for this test; a finite stiffness turns the contact normal during the "
+        "contact, an error that shrinks as kN^-1/2.", kind="source"),
     "impact.velocities": Tolerance(
         1e-3,
         "Acceptance of issue 2 (0.1 %), against the exact solution of the linear-spring contact (central-force "
@@ -117,17 +124,23 @@ TOLERANCES = {
     "liquefaction.mesh": Tolerance(
         5e-3, "Mesh study of thesis-liquefaction at γ = 0.35 %: wall-1 mean pressure at 32, 64, 128 elements per disc "
               "differs by ≤ 1.3e-3 (measured); the same bound as the pressure check.", kind="self-consistency"),
+    "nine-disc.same-frequency": Tolerance(
+        1e-3,
+        "C&S Fig. 7: both loading speeds oscillate at the same frequency afterwards (same stiffnesses and masses: "
+        "the same linear system). The estimate counts ~120 periods between interpolated mean crossings over "
+        "~3000 cycles recorded every cycle; one cycle of timing error at either end is 3e-4 relative, so 1e-3 is "
+        "three times the estimator's resolution. Per cycle, with Δt a fixed fraction of 2√(m/k), the stiffness "
+        "drops out; the check sees whether the loading speed left the same contact state. Negative control "
+        "(tests/test_negative_controls.py): a run at the Δt fraction 0.1 instead of 0.08 fails it (ratio 1.25).",
+        kind="source"),
     "simple-shear.equilibrium": Tolerance(
         1e-2,
-        "Static equilibrium of the wall forces (thesis Figs 5.24, 5.33, 5.41, 5.49). Rate study of the dry shear, seed 1: "
-        "rms |Σ F| / F_y over the shear 0.87/0.69/0.33/0.24 % (loose) and 0.13/0.04/0.02/0.01 % (dense) at "
-        "γ̇ = 0.2/0.1/0.05/0.02 /s; single slip events reach 6-9 % for a few records (the thesis: 'some oscillations "
-        "between 4 and 7 %'). 1 % rms is three times the loose value at the default γ̇ = 0.05.", absolute=True, kind="self-consistency"),
-    "simple-shear.peak-ratio": Tolerance(
-        0.6,
-        "'Peak S/F_y of order 0.2' (thesis 0.2 loose, 0.19 dense, from one 20-disc arrangement that is lost). 0.6 "
-        "relative accepts 0.08-0.32, within a factor 2.5 of the thesis: the same order, not the same arrangement. Seed "
-        "ensemble (seeds 1-8, both specimens, dry): peaks 0.042-0.176, 14 of 16 inside (report table).", kind="source"),
+        "Static equilibrium of the wall forces (thesis Figs 5.24, 5.33, 5.41, 5.49). Rate study of the dry shear, seed 1 "
+        "(benchmarks/simple_shear_rate.py, results/simple_shear_rate.txt): rms |Σ F| / F_y over the shear "
+        "1.73/1.68/0.87/0.21 % (loose) and 0.14/0.06/0.03/0.01 % (dense) at γ̇ = 0.2/0.1/0.05/0.02 /s; single slip "
+        "events reach 4-30 % for a few records (the thesis: 'some oscillations between 4 and 7 %'). 1 % rms holds "
+        "at the default γ̇ = 0.05 (0.87 %) and below, and fails at 0.1 /s and faster: it checks that the default "
+        "rate is quasi-static, which the faster rates are not.", absolute=True, kind="self-consistency"),
     "simple-shear.incompressible": Tolerance(
         1e-2,
         "Walls 1 and 3 of the closed box see the same pore pressure up to the viscous pressure drop (thesis §5.5.4.1: "

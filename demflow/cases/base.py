@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     from ..scene import Scene
 
 INFO = "info"  # the kind of an informative line (Check.info)
+MISS = "miss"  # the kind of a source figure not reproduced (Check.miss)
 
 
 @dataclass
@@ -81,9 +82,19 @@ class Check:
         c.passed = True
         return c
 
+    @classmethod
+    def miss(cls, name, value, reference, source, cause, relative=True):
+        """A source figure demflow does not reproduce: its value beside the source's ``reference``,
+        the error, and ``cause`` (what was measured to explain the difference).  Never a pass; not a
+        failure of the case either (the case claims no agreement here): the report lists it as a miss."""
+        c = cls(name, float(value), float(reference), math.inf, source, "NOT REPRODUCED. " + cause,
+                relative=relative, kind=MISS)
+        c.passed = False
+        return c
+
     @property
     def informative(self) -> bool:
-        return self.kind == INFO
+        return self.kind in (INFO, MISS)
 
 
 def kind_of(check) -> str:
@@ -113,9 +124,9 @@ def validation_passes(checks) -> tuple[int, int]:
 
 
 def counted(checks) -> list:
-    """The pass/fail checks of a list (the informative lines left out): Check objects or their
-    summary dicts."""
-    return [c for c in checks if kind_of(c) != INFO]
+    """The pass/fail checks of a list (the informative lines and the known misses left out): Check
+    objects or their summary dicts."""
+    return [c for c in checks if kind_of(c) not in (INFO, MISS)]
 
 
 @dataclass

@@ -38,7 +38,10 @@ class OneDisc(Case):
     assumptions = (
         "Table 2.1's damping columns for cases 2 and 3 are swapped against the text; the text is followed "
         "(case 2: global C = 1e4; case 3: contact cN = 1e5).",
-        "The disc starts touching the plate, at rest; the reported force is that of the 5000th cycle.",
+        "The disc starts touching the plate, at rest; the reported force is that of the 5000th cycle (cycles "
+        "counted from 1, the first evaluating forces at t = 0): step index 4999. The case-2 check depends on this "
+        "reading: the informative line below gives the force's change over one step there, to be set against the "
+        "0.01 % tolerance.",
     )
     params = dict(dt=1e-3, n_steps=5000, kn=1e7)
 
@@ -66,7 +69,13 @@ class OneDisc(Case):
         out = []
         for name, ref in REFERENCE.items():
             f, _ = self.plate_force(results[name])
-            out.append(Check.against(f"{name}: force at t = 5 s [N]", f[-1], ref, "one-disc.final-force", SRC))
+            out.append(Check.against(f"{name}: force at t = 5 s (the 5000th cycle, step 4999) [N]", f[-1], ref,
+                                     "one-disc.final-force", SRC))
+            if name == "case2-global-damping":
+                out.append(Check.info(f"{name}: relative change of the force over the last step (how much reading "
+                                      "t = 5 s as step 4999 rather than 4998 or 5000 moves it)",
+                                      abs(f[-1] - f[-2]) / f[-1], SRC, "The reading of 't = 5 s' as a step index is an "
+                                      "assumption (see above); compare this change with the 1e-4 tolerance."))
         f, _ = self.plate_force(results["case1-undamped"])
         out.append(Check.against("case1-undamped: peak force / (2 W)", f.max() / (2 * WEIGHT), 1.0,
                                  "one-disc.undamped-peak", "damped-oscillator solution (thesis eq 2.39, C = 0)"))

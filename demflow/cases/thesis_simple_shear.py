@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import time
 
+import math
+
 import numpy as np
 import pandas as pd
 
@@ -60,6 +62,7 @@ def curves(res) -> pd.DataFrame:
     out["S1"] = piv["fx"]["bottom"]
     out["S3"] = piv["fx"]["top"]
     out["S"] = 0.5 * (out.S3 - out.S1)
+    out["F1"] = piv["fy"]["bottom"]
     out["F3"] = piv["fy"]["top"]
     out["dh"] = (piv["py"]["top"] - piv["py"]["bottom"] - m["height"]) / m["height"] * 100.0
     out["sum_fx"] = piv["fx"].sum(axis=1)
@@ -100,8 +103,13 @@ def equilibrium(res) -> tuple[float, float]:
 def dry_behaviour(res) -> dict:
     c = curves(res)
     k = int(np.argmin(c.dh))
+    # how much of the lids' Coulomb bound the shear force uses: S / (tan φ_dw × mean lid normal force)
+    lid_n = 0.5 * (c.F1.abs() + c.F3.abs()).to_numpy()
+    bound = math.tan(math.radians(setup.PHI_DW)) * lid_n
+    use = np.where(bound > 0, c.S.to_numpy() / np.where(bound > 0, bound, 1.0), 0.0)
     return dict(dh_max=float(c.dh.max()), dh_min=float(c.dh.min()), gamma_min=float(c.gamma.iloc[k]),
-                dh_end=float(c.dh.iloc[-1]), peak_S=float(c.S.max() / res.meta["fy"]))
+                dh_end=float(c.dh.iloc[-1]), peak_S=float(c.S.max() / res.meta["fy"]),
+                lid_bound_use=float(use.max()))
 
 
 def wet_behaviour(res) -> dict:
@@ -205,8 +213,24 @@ class SimpleShear(Case):
                         b["dh_min"] < -0.02 and b["gamma_min"] < 0.9 * p["gamma_max"] and b["dh_end"] > b["dh_min"] + 0.2,
                         b["dh_end"] - b["dh_min"], SRC, "Thesis Fig. 5.40: 'the volume initially decreases before starting "
                         "to increase steadily'; 0.2 % of H is 10× the servo lid's noise.", kind="source"))
-                out.append(Check.against(f"{v}: peak S/F_y (thesis {0.2 if kind == 'loose' else 0.19})", b["peak_S"],
-                                         0.2 if kind == "loose" else 0.19, "simple-shear.peak-ratio", SRC))
+                thesis = 0.2 if kind == "loose" else 0.19
+                cap = math.tan(math.radians(setup.PHI_DW))
+                out.append(Check.miss(
+                    f"{v}: peak S/F_y (thesis {thesis})", b["peak_S"], thesis, SRC,
+                    f"The shear force S is carried by the lids' contacts, whose Coulomb bound is tan φ_dw = tan "
+                    f"{setup.PHI_DW:g}° = {cap:.3f} of the lid's normal force: S/F_y cannot exceed about {cap:.3f} "
+                    f"(F_y held by the servo), below the thesis's {thesis}. Measured here: S reaches "
+                    f"{100 * b['lid_bound_use']:.0f} % of that bound; over seeds 1-8 (ensemble table) the peaks "
+                    "stay at or below it. What lets the thesis's specimens go higher (rough or toothed lids, a "
+                    "different S) is not in the text."))
+                m = res.meta
+                e_thesis = 0.2611 if kind == "loose" else 0.2465
+                out.append(Check.miss(
+                    f"{kind} specimen void ratio (thesis {100 * e_thesis:.2f} %)", m["void_ratio"], e_thesis, SRC,
+                    f"The thesis's 20-disc arrangement (Fig. 5.15) is lost; this seed's random arrangement, "
+                    f"compressed by the thesis's protocol to F_y, jams at {m['width']:.4f} × {m['height']:.4f} cm "
+                    f"(thesis {0.89:.2f} × {0.69 if kind == 'loose' else 0.682:g} cm): the void ratio is the "
+                    "arrangement's. The seed-ensemble table gives e for seeds 1-8."))
             else:
                 b = wet_behaviour(res)
                 if kind == "loose":

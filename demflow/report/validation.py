@@ -19,8 +19,9 @@ import matplotlib
 matplotlib.use("Agg")
 
 from .. import progress
+from ..manifest import describe
 from ..cases import CASES  # noqa: E402
-from ..cases.base import INFO, counted, kind_counts, kind_of, validation_passes  # noqa: E402
+from ..cases.base import INFO, MISS, counted, kind_counts, kind_of, validation_passes  # noqa: E402
 
 
 def check_counts(checks) -> str:
@@ -34,6 +35,8 @@ def check_counts(checks) -> str:
         text += f", {counts['calibration']['passed']}/{counts['calibration']['total']} calibrations"
     if "unclassified" in counts:
         text += f", {counts['unclassified']['passed']}/{counts['unclassified']['total']} unclassified"
+    if MISS in counts:
+        text += f", {counts[MISS]['total']} source figures not reproduced"
     if INFO in counts:
         text += f", {counts[INFO]['total']} informative"
     return text
@@ -41,7 +44,7 @@ def check_counts(checks) -> str:
 
 def _kind_cell(checks) -> str:
     """Passes per kind, e.g. "source 3/3 · exact 2/2 · info 4"."""
-    return " · ".join(f"{k} {v['total']}" if k == INFO else f"{k} {v['passed']}/{v['total']}"
+    return " · ".join(f"{k} {v['total']}" if k in (INFO, MISS) else f"{k} {v['passed']}/{v['total']}"
                       for k, v in kind_counts(checks).items())
 
 
@@ -95,7 +98,9 @@ def run_validation(names=None, outdir="reports/validation", overrides=None, case
         figs = [Path(f).name for f in case.figures(run, p, str(casedir))]
         tables = [dict(title=t, html=df.to_html(float_format=lambda v: f"{v:.4g}", border=0))
                   for t, df in case.tables(run, p)]
-        summary["cases"][name] = dict(
+        physics = {v: describe(r.meta["physics"]) for v, r in run.results.items()
+                   if isinstance(getattr(r, "meta", None), dict) and r.meta.get("physics")}
+        summary["cases"][name] = dict(physics=physics,
             run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title, source=case.source,
             params=p, wall_time_s=round(wall, 3), tables=tables,
             passed=all(c.passed for c in counted(checks)), assumptions=list(case.assumptions), figures=figs,
@@ -135,6 +140,8 @@ def _mark(ch):
     """(CSS class, text) of a check's verdict cell."""
     if kind_of(ch) == INFO:
         return "small", "info"
+    if kind_of(ch) == MISS:
+        return "fail", "MISS"
     return ("pass", "pass") if ch["passed"] else ("fail", "FAIL")
 
 
@@ -161,6 +168,11 @@ def write_report(summary, outdir="reports/validation"):
         for t in c.get("tables", []):  # pandas' to_html escapes the cells
             extra += f"<h2>{html.escape(t['title'])}</h2>{t['html']}"
         figs = "".join(f"<p><img src='{html.escape(f)}'></p>" for f in c["figures"])
+        if c.get("physics"):
+            extra += ("<h2>What was built (physics manifest, meta.json 'physics')</h2><table><tr><th>variant</th>"
+                      "<th>kernels, history, fluid, damping, state</th></tr>" + "".join(
+                          f"<tr><td>{html.escape(v)}</td><td class='small'>{html.escape(d)}</td></tr>"
+                          for v, d in c["physics"].items()) + "</table>")
         params = html.escape(json.dumps(c["params"]))
         page = (f"<!doctype html><html><head><meta charset='utf-8'><title>{name}</title><style>{CSS}</style></head>"
                 f"<body><p><a href='../index.html'>← all cases</a></p><h1>{html.escape(c['title'])}</h1>"
@@ -180,6 +192,15 @@ def write_report(summary, outdir="reports/validation"):
     robustness = render(results_dir())  # the fuzz scripts' last run (issue 19), if there is one
     if robustness:
         _atomic_text(outdir / PAGE, robustness)
+    from . import source_figures
+
+    summary["source_figures"] = dict(counts=source_figures.counts(summary), rows=source_figures.rows(summary))
+    _atomic_text(outdir / "sources.html",
+                 f"<!doctype html><html><head><meta charset='utf-8'><title>demflow: source figures</title>"
+                 f"<style>{CSS}</style></head><body><p><a href='index.html'>← all cases</a></p>"
+                 f"<h1>The sources' figures: reproduced or not</h1>{source_figures.render(summary)}</body></html>")
+    _atomic_text(outdir / "source_figures.md", source_figures.markdown(summary) + "\n")
+    sf = " · ".join(f"{k} {v}" for k, v in sorted(summary["source_figures"]["counts"].items()))
     all_ok = all(c["passed"] for c in summary["cases"].values())
     every = [ch for c in summary["cases"].values() for ch in c["checks"]]
     summary["counts"] = kind_counts(every)
@@ -191,7 +212,9 @@ def write_report(summary, outdir="reports/validation"):
              f"<span class='{'pass' if all_ok else 'fail'}'>{'PASS' if all_ok else 'FAIL'}</span></p>"
              f"<p>Validation checks passed: {n_val}/{m_val} (source figures, exact solutions, other codes, "
              f"self-consistency); per kind: {html.escape(_kind_cell(every))}. Calibrations (a lost parameter fitted "
-             f"to the very figure checked) and informative lines are never counted as validation.</p>"
+             f"to the very figure checked), known misses (a source figure not reproduced, with its measured cause) "
+             f"and informative lines are never counted as validation.</p>"
+             f"<p>Source figures (<a href='sources.html'>table</a>): {html.escape(sf)}.</p>"
              f"<table><tr><th>case</th><th>what</th><th>source</th><th>checks passed</th><th>per kind</th><th></th>"
              f"<th>wall time [s]</th>"
              f"<th>run at</th></tr>{''.join(rows)}</table>{_not_run(summary)}"

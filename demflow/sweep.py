@@ -1,0 +1,91 @@
+"""Sweeps on Dask: many independent runs of a case (seed ensembles, parameter studies), one table.
+
+:func:`run_sweep` maps a picklable function over items on a Dask cluster and returns the results in
+the items' order; :func:`case_sweep` runs a registered case once per parameter set and gathers every
+check's value into one pandas table (``demflow sweep CASE --set seed=1,2,...``).  Where it runs:
+
+- ``scheduler=None`` or ``"local"``: a local cluster of ``workers`` processes (default: one per core),
+  one thread each, started for the sweep and closed after it;
+- ``scheduler="serial"``: in this process, one item after another (what the tests compare with);
+- ``scheduler="tcp://host:port"``: an existing ``dask.distributed`` scheduler.
+
+Each run is the same computation wherever it runs (a case's runs depend on their parameters only, and
+demflow's results do not depend on the thread count), so a sweep's table is identical on any scheduler;
+``tests/test_sweep.py`` checks it.  Numba's on-disk cache is shared by the worker processes: a
+kernel compiled once is loaded, not recompiled, by the others.
+"""
+from __future__ import annotations
+
+import itertools
+import os
+import time
+
+import pandas as pd
+
+
+def _client(scheduler, workers):
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler in (None, "local"):
+        n = int(workers or os.cpu_count() or 1)
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=40)
+        return Client(cluster), cluster
+    return Client(scheduler), None
+
+
+def run_sweep(fn, items, *, scheduler=None, workers=None, progress: bool | None = None) -> list:
+    """[fn(item) for item in items], computed on Dask (module docstring), in the items' order."""
+    from . import progress as prog
+
+    items = list(items)
+    if scheduler == "serial":
+        return [fn(it) for it in prog.iterate(items, "sweep", "run", show=progress)]
+    from dask.distributed import as_completed
+
+    client, cluster = _client(scheduler, workers)
+    try:
+        futures = client.map(fn, items, pure=False)
+        index = {f.key: k for k, f in enumerate(futures)}
+        out = [None] * len(items)
+        with prog.bar(len(items), "sweep", "run", show=progress, leave=True) as bar:
+            for f in as_completed(futures):
+                out[index[f.key]] = f.result()
+                bar.update(1)
+        return out
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def parameter_grid(sets: dict) -> list[dict]:
+    """Every combination of the listed values: {"seed": [1, 2], "dt": [1e-4]} → [{seed 1, dt 1e-4}, ...]."""
+    keys = list(sets)
+    return [dict(zip(keys, combo)) for combo in itertools.product(*(sets[k] for k in keys))]
+
+
+def run_case_checks(job: tuple) -> list[dict]:
+    """One run of a registered case: (case name, parameter overrides) → a row per check (value,
+    reference, error, passed, kind) with the overrides and the wall time. Top level: picklable."""
+    from .cases import get_case
+
+    name, overrides = job
+    case = get_case(name)
+    p = case.merged(overrides)
+    t0 = time.perf_counter()
+    run = case.run(p)
+    wall = time.perf_counter() - t0
+    return [dict(**overrides, check=c.name, kind=c.kind, value=c.value, reference=c.reference, error=c.error,
+                 passed=c.passed, wall_s=wall) for c in case.checks(run, p)]
+
+
+def case_sweep(name: str, sets: dict, *, scheduler=None, workers=None, progress: bool | None = None) -> pd.DataFrame:
+    """Run case ``name`` once per combination of ``sets`` (parameter → values) and return one table:
+    a row per run and check (module docstring)."""
+    jobs = [(name, over) for over in parameter_grid(sets)]
+    rows = run_sweep(run_case_checks, jobs, scheduler=scheduler, workers=workers, progress=progress)
+    return pd.DataFrame([r for run in rows for r in run])
+
+
+__all__ = ["run_sweep", "parameter_grid", "run_case_checks", "case_sweep"]
