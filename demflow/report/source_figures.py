@@ -17,6 +17,7 @@ come from the checks themselves, never from this file.  A figure's status:
 from __future__ import annotations
 
 import html
+import math
 import re
 from dataclasses import dataclass
 
@@ -147,7 +148,7 @@ def counts(summary: dict) -> dict:
 
 
 def _num(v) -> str:
-    if v is None:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):  # summary.json writes ∞ and NaN as null
         return "—"
     return f"{v:.4g}" if isinstance(v, float) else html.escape(str(v))
 
@@ -178,10 +179,16 @@ def markdown(summary: dict) -> str:
     """The table in Markdown (one line per figure; the README embeds it)."""
     lines = ["| source | where | figure | status | demflow vs reference (worst check) |", "|---|---|---|---|---|"]
     for r in rows(summary):
-        judged = [c for c in r["checks"] if c["kind"] != INFO] or r["checks"]
+        # the figure's own checks first (miss, source, calibration), then the others; the worst of them
+        judged = ([c for c in r["checks"] if c["kind"] in (MISS, "source", "calibration")]
+                  or [c for c in r["checks"] if c["kind"] != INFO] or r["checks"])
         if judged:
-            worst = max(judged, key=lambda c: (c["kind"] == MISS, not c["passed"], (c["error"] or 0) /
-                                               (c["tolerance"] if c["tolerance"] else 1.0)))
+            def badness(c):
+                err = c["error"] if c["error"] is not None and math.isfinite(c["error"]) else 0.0
+                tol = c["tolerance"] if c["tolerance"] is not None and math.isfinite(c["tolerance"]) else 0.0
+                return (c["kind"] == MISS, not c["passed"], err if c["kind"] == MISS else err / (tol or 1.0))
+
+            worst = max(judged, key=badness)
             num = (f"{_num(worst['value'])} vs {_num(worst['reference'])} (error {_num(worst['error'])}, "
                    f"tolerance {_num(worst['tolerance'])})")
         else:
