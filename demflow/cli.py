@@ -113,6 +113,28 @@ def build_parser() -> argparse.ArgumentParser:
                          "or the address of an existing dask.distributed scheduler, e.g. tcp://10.0.0.5:8786")
     sw.add_argument("--workers", type=int, default=None, help="local cluster size (default: one per core)")
     sw.add_argument("--out", default=None, help="write the table here (.parquet or .csv; default: print it)")
+    to = sub.add_parser("tradeoff", help="measure speed against accuracy for one knob at a time",
+                        formatter_class=fmt,
+                        description="Run a case at a reference setting, at a chaos floor (the reference with an "
+                                    "irrelevant change) and once per value of each knob; write the knob table "
+                                    "(error of the case's observables vs the reference, wall time, particle-steps/s, "
+                                    "Pareto front, recommended setting) and the error-vs-cost figure.\n\nexample:\n"
+                                    "  demflow tradeoff thesis-impact --knob dt=4e-5,2e-5,1e-5 --reference dt=1e-6 "
+                                    "--floor kn=1.0001e7")
+    to.add_argument("case", help="the case name ('demflow cases' lists them)")
+    to.add_argument("--knob", action="append", required=True, metavar="NAME=V1,V2,...",
+                    help="a case parameter and the values to try, one knob at a time (repeatable)")
+    to.add_argument("--reference", action="append", default=[], metavar="NAME=VALUE",
+                    help="overrides of the case's defaults for the reference run (repeatable)")
+    to.add_argument("--floor", action="append", default=[], metavar="NAME=VALUE",
+                    help="the chaos floor: overrides applied on top of the reference (e.g. a density × 1.0001)")
+    to.add_argument("--accept", type=float, default=2.0,
+                    help="the recommended setting's error may be this many times the floor's (default 2)")
+    to.add_argument("--scheduler", default="serial",
+                    help="'serial' (default; timings undisturbed), 'local' (a Dask local cluster) or a scheduler "
+                         "address")
+    to.add_argument("--out", default=None, help="directory for tradeoff.parquet, tradeoff.txt and tradeoff.png "
+                                                "(default runs/tradeoff-CASE)")
     return ap
 
 
@@ -209,6 +231,36 @@ def main(argv=None):
         print(f"{'PASS' if c['passed'] else 'FAIL'}  {case.name}: {check_counts(c['checks'])}; "
               f"page {Path(args.out) / case.name / 'index.html'}")
         return 0 if c["passed"] else 1
+    if args.cmd == "tradeoff":
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from .tradeoff import TradeoffStudy
+
+        try:
+            study = TradeoffStudy(args.case, _parse_grid(args.knob), reference=_parse_sets(args.reference),
+                                  floor=_parse_sets(args.floor) or None, accept=args.accept, scheduler=args.scheduler)
+        except (KeyError, ValueError) as e:
+            print(f"demflow: {e.args[0]}", file=sys.stderr)
+            return 2
+        study.compute()
+        out = Path(args.out or f"runs/tradeoff-{args.case}")
+        out.mkdir(parents=True, exist_ok=True)
+        t = study.table
+        t.to_parquet(out / "tradeoff.parquet.tmp", index=False)
+        (out / "tradeoff.parquet.tmp").replace(out / "tradeoff.parquet")
+        (out / "tradeoff.txt.tmp").write_text(t.to_string(index=False) + "\n")
+        (out / "tradeoff.txt.tmp").replace(out / "tradeoff.txt")
+        fig, ax = plt.subplots(figsize=(6.5, 4.2))
+        study.plot(ax)
+        from .plotting import save_figure
+
+        save_figure(fig, str(out / "tradeoff.png"))
+        print(t.to_string(index=False))
+        print(f"recommended: {study.recommended['run']}; table and figure in {out}")
+        return 0
     if args.cmd == "sweep":
         from .sweep import case_sweep
 

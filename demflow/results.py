@@ -101,7 +101,7 @@ class Results:
         from .manifest import physics_manifest
 
         meta = dict(engine="demflow", scene=sim.scene.name, dt=dt, dt_crit=sim.dt_crit, steps=sim.step,
-                    n_discs=sim.n, walls=sim.wall_names, rebuilds=sim.rebuilds, physics=physics_manifest(sim))
+                    n_discs=sim.n, walls=sim.wall_names, rebuilds=sim.rebuilds, physics=physics_manifest(sim), dem_s=float(sim.dem_s))
         fluid = {}
         if sim.fluid is not None:
             fc = sim.fluid

@@ -92,7 +92,7 @@ def test_a_run_shows_a_progress_bar_when_asked_and_none_in_a_pipe(capsys, monkey
 def test_every_command_and_option_has_a_help_text():
     ap = build_parser()
     subs = next(a for a in ap._actions if isinstance(a, argparse._SubParsersAction))
-    assert set(subs.choices) == {"cases", "run", "validate", "reference", "compare", "sweep"}
+    assert set(subs.choices) == {"cases", "run", "validate", "reference", "compare", "sweep", "tradeoff"}
     helps = {c.dest: c.help for c in subs._choices_actions}
     for name, parser in subs.choices.items():
         assert helps.get(name), f"command {name} has no help line"
@@ -105,7 +105,7 @@ def test_every_command_and_option_has_a_help_text():
             assert a.help, a
 
 
-@pytest.mark.parametrize("cmd", [[], ["run"], ["validate"], ["reference"], ["compare"], ["cases"], ["sweep"]])
+@pytest.mark.parametrize("cmd", [[], ["run"], ["validate"], ["reference"], ["compare"], ["cases"], ["sweep"], ["tradeoff"]])
 def test_help_runs_from_the_command_line(cmd):
     out = subprocess.run([sys.executable, "-m", "demflow.cli", *cmd, "--help"], capture_output=True, text=True,
                          timeout=120)

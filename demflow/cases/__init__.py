@@ -20,6 +20,7 @@ from .thesis_simple_shear_study import SimpleShearStudy
 from .hertz_impacts import HertzImpacts
 from .ch3_stack import DampedStack, ElasticStack
 from .conformance_3d import Conformance3D
+from .tradeoff_studies import ImpactTradeoff
 from .ch3_chain import ImpulseChain
 from .miyata_uniaxial3d import MiyataUniaxial3D
 
@@ -36,6 +37,7 @@ CASES[DampedStack.name] = DampedStack()
 CASES[ImpulseChain.name] = ImpulseChain()
 CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
 CASES[Conformance3D.name] = Conformance3D()
+CASES[ImpactTradeoff.name] = ImpactTradeoff()
 
 
 def get_case(name: str) -> Case:

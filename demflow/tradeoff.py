@@ -1,0 +1,187 @@
+"""Speed against accuracy, measured for one knob at a time (issue 17 item 1).
+
+A :class:`TradeoffStudy` (freud-like: configure, ``compute()`` returns ``self``, then ``table`` and
+``plot(ax=None)``) runs a registered case
+
+1. at a *reference* setting (the finest the user can afford: parameter overrides),
+2. at the *chaos floor*: the reference with a physically irrelevant change (``floor``, e.g. a density
+   × 1.0001); its distance from the reference is how far any perturbation moves the case's
+   observables (a chaotic packing's history diverges), so a knob's error is only meaningful above it,
+3. once per value of each knob, every other parameter at the reference.
+
+Observables are the case's own check values (every finite, non-informative check: what the case
+claims to reproduce).  A run's *error* is the root mean square over observables of
+|v − v_ref| / max(|v_ref|, scale), where ``scale`` guards zero references; its *cost* is the wall
+time and the particle-steps per second (from each result's steps and particle count), with the
+simulation time split into DEM and fluid (BEM) time where the results record them.  Runs go through
+:func:`demflow.sweep.run_sweep` (serial by default, a Dask cluster on request).
+
+The table marks the Pareto front (no other run is both cheaper and more accurate) and the
+*recommended* setting: the cheapest knob setting whose error is within ``accept`` × the chaos floor
+(default 2: indistinguishable from the reference up to the floor's own noise), or the most accurate
+knob setting when none is (``within_floor`` says which).  With ``warmup`` one untimed run compiles
+the kernels first, so that no timed run pays for compilation.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pandas as pd
+
+
+def _cost(run) -> dict:
+    """Particle-steps, DEM and fluid seconds of a CaseRun's results (those that record them)."""
+    steps = dem = bem = 0.0
+    for res in run.results.values():
+        meta = getattr(res, "meta", {}) or {}
+        n = meta.get("n_discs") or meta.get("n_spheres") or 0
+        steps += float(meta.get("steps", 0) or 0) * float(n)
+        dem += float(meta.get("dem_s", 0.0) or 0.0)
+        bem += float(meta.get("bem_s", meta.get("bem_seconds", 0.0)) or 0.0)
+    return dict(particle_steps=steps, dem_s=dem, bem_s=bem)
+
+
+def run_observed(job) -> dict:
+    """One run of a study: (case name, overrides) → its observables (check name → value) and cost.
+    Top level: picklable for a Dask worker."""
+    from .cases import get_case
+    from .cases.base import counted
+
+    name, overrides = job
+    case = get_case(name)
+    p = case.merged(overrides)
+    t0 = time.perf_counter()
+    run = case.run(p)
+    wall = time.perf_counter() - t0
+    obs = {c.name: float(c.value) for c in counted(case.checks(run, p)) if math.isfinite(c.value)}
+    return dict(observables=obs, wall_s=wall, **_cost(run))
+
+
+def pareto_front(cost, error) -> np.ndarray:
+    """Boolean mask of the non-dominated points (lower cost and lower error are better)."""
+    cost, error = np.asarray(cost, float), np.asarray(error, float)
+    keep = np.ones(cost.size, bool)
+    for i in range(cost.size):
+        dominated = (cost <= cost[i]) & (error <= error[i]) & ((cost < cost[i]) | (error < error[i]))
+        keep[i] = not dominated.any()
+    return keep
+
+
+class TradeoffStudy:
+    """One knob at a time against a reference and a chaos floor (module docstring).
+
+    case: a registered case name; knobs: {parameter: [values]}; reference: overrides of the case's
+    defaults for the reference run; floor: overrides applied on top of the reference for the chaos
+    floor run (None: no floor, errors are then judged against ``accept`` × 0); scale: the smallest
+    reference magnitude an observable's relative error divides by; accept: the recommended run's
+    error may be this many times the floor's."""
+
+    def __init__(self, case: str, knobs: dict, reference: dict | None = None, floor: dict | None = None,
+                 scale: float = 1e-12, accept: float = 2.0, scheduler: str | None = "serial", workers=None,
+                 warmup: bool = True):
+        from .cases import get_case
+
+        c = get_case(case)
+        for k in list(knobs) + list(reference or {}) + list(floor or {}):
+            if k not in c.params:
+                raise KeyError(f"case {case!r} has no parameter {k!r}; parameters: {sorted(c.params)}")
+        if not knobs or any(len(list(v)) == 0 for v in knobs.values()):
+            raise ValueError(f"knobs={knobs!r}: give at least one knob with at least one value")
+        if not (accept >= 1.0):
+            raise ValueError(f"accept={accept!r}: the recommended run's error bound is accept × floor, accept ≥ 1")
+        self.case, self.knobs = case, {k: list(v) for k, v in knobs.items()}
+        self.reference, self.floor = dict(reference or {}), (dict(floor) if floor else None)
+        self.scale, self.accept = float(scale), float(accept)
+        self.scheduler, self.workers, self.warmup = scheduler, workers, bool(warmup)
+        self.table: pd.DataFrame | None = None
+        self.runs: list[dict] = []
+
+    def _jobs(self):
+        jobs = [("reference", None, None, dict(self.reference))]
+        if self.floor:
+            jobs.append(("chaos floor", None, None, dict(self.reference, **self.floor)))
+        for k, values in self.knobs.items():
+            for v in values:
+                jobs.append((f"{k} = {v}", k, v, dict(self.reference, **{k: v})))
+        return jobs
+
+    def error(self, obs: dict, ref: dict) -> float:
+        common = [k for k in ref if k in obs]
+        if not common:
+            return math.nan
+        d = [abs(obs[k] - ref[k]) / max(abs(ref[k]), self.scale) for k in common]
+        return float(np.sqrt(np.mean(np.square(d))))
+
+    def compute(self) -> "TradeoffStudy":
+        from .sweep import run_sweep
+
+        jobs = self._jobs()
+        if self.warmup:  # compile the kernels before anything is timed (serial runs share this process)
+            run_observed((self.case, jobs[-1][3]))
+        self.runs = run_sweep(run_observed, [(self.case, over) for *_, over in jobs], scheduler=self.scheduler,
+                              workers=self.workers)
+        ref = self.runs[0]["observables"]
+        rows = []
+        for (label, knob, value, over), r in zip(jobs, self.runs):
+            rows.append(dict(run=label, knob=knob or "", value=value, error=self.error(r["observables"], ref),
+                             observables=len(r["observables"]), wall_s=r["wall_s"],
+                             particle_steps_per_s=(r["particle_steps"] / r["wall_s"]) if r["wall_s"] > 0 else math.nan,
+                             dem_s=r["dem_s"], fluid_s=r["bem_s"]))
+        t = pd.DataFrame(rows)
+        floor = float(t.loc[t.run == "chaos floor", "error"].iloc[0]) if self.floor else 0.0
+        t["error_over_floor"] = t.error / floor if floor > 0 else math.nan
+        t["pareto"] = pareto_front(t.wall_s, t.error)
+        knobs = t[t.knob != ""]
+        ok = knobs[knobs.error <= self.accept * floor]
+        pick = ok.wall_s.idxmin() if len(ok) else knobs.error.idxmin()
+        self.within_floor = bool(len(ok))
+        t["recommended"] = False
+        t.loc[pick, "recommended"] = True
+        self.floor_error = floor
+        self.table = t
+        return self
+
+    @property
+    def recommended(self) -> dict:
+        """The recommended run's row (as a dict)."""
+        if self.table is None:
+            raise RuntimeError("call compute() first")
+        return self.table[self.table.recommended].iloc[0].to_dict()
+
+    def plot(self, ax=None):
+        """Error against wall time, one marker per run, the Pareto front joined, the chaos floor as a
+        band, the recommended run ringed."""
+        import matplotlib.pyplot as plt
+
+        if self.table is None:
+            raise RuntimeError("call compute() first")
+        if ax is None:
+            _, ax = plt.subplots(figsize=(6, 4))
+        t = self.table
+        tiny = max(self.floor_error, 1e-16) * 1e-3 if self.floor_error > 0 else 1e-16
+        err = t.error.clip(lower=tiny)
+        for knob in t.knob.unique():
+            s = t[t.knob == knob]
+            ax.scatter(s.wall_s, err[s.index], label=knob or "reference / floor", zorder=3)
+            for _, r in s.iterrows():
+                ax.annotate(str(r.value) if knob else r.run, (r.wall_s, err[r.name]), fontsize=7,
+                            xytext=(3, 3), textcoords="offset points")
+        front = t[t.pareto].sort_values("wall_s")
+        ax.plot(front.wall_s, err[front.index], "k--", lw=0.8, label="Pareto front")
+        if self.floor_error > 0:
+            ax.axhspan(tiny, self.accept * self.floor_error, color="0.85", zorder=0,
+                       label=f"≤ {self.accept:g} × chaos floor")
+        rec = t[t.recommended]
+        ax.scatter(rec.wall_s, err[rec.index], s=160, facecolors="none", edgecolors="r", label="recommended")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall time [s]")
+        ax.set_ylabel("rms relative error of the observables vs the reference")
+        ax.set_title(f"{self.case}: speed vs accuracy", fontsize=9)
+        ax.legend(fontsize=7)
+        return ax
+
+
+__all__ = ["TradeoffStudy", "pareto_front", "run_observed"]
