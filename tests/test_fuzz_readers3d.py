@@ -57,7 +57,7 @@ def test_corrupted_outputs_are_refused_with_engine_output_error_only(engine_sim,
             outcomes["refused"] += 1
         else:  # the corruption left a well-formed output (a changed digit)
             assert isinstance(res, Trajectory3D) and len(res.spheres) == (rf.N_STEPS // rf.EVERY + 1) * sim.n
-            assert np.all(np.isfinite(res.spheres[["x", "y", "z", "vx", "vy", "vz"]].to_numpy())), (name, kind)
+            assert np.all(np.isfinite(res.spheres[["x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz"]].to_numpy())), (name, kind)
             outcomes["accepted"] += 1
         shutil.rmtree(d)
     assert outcomes["refused"] >= 0.6 * N_PER_READER, outcomes

@@ -373,12 +373,17 @@ class Liggghts3DEngine(LiggghtsEngine):
             m, rad = d[:, 19], d[:, 20]
             if not (np.all(m > 0) and np.all(rad > 0)):
                 raise _bad_output(outdir / "spheres.txt", None, f"timestep {step}: a mass or radius is not positive")
-            pos = d[:, 1:4] + d[:, 4:7] * period  # image flags are 0 along non-periodic axes
-            dtfm = dtf / m
-            v = d[:, 7:10] - dtfm[:, None] * d[:, 13:16]  # the dump's velocities are half a step ahead
-            dtirot = (dtf / 0.4) / (rad * rad * m)
-            w = d[:, 10:13] - dtirot[:, None] * d[:, 16:19]
-            rows.append(np.concatenate([pos, v, w], axis=1))
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # refused below when not finite
+                pos = d[:, 1:4] + d[:, 4:7] * period  # image flags are 0 along non-periodic axes
+                dtfm = dtf / m
+                v = d[:, 7:10] - dtfm[:, None] * d[:, 13:16]  # the dump's velocities are half a step ahead
+                dtirot = (dtf / 0.4) / (rad * rad * m)
+                w = d[:, 10:13] - dtirot[:, None] * d[:, 16:19]
+                row = np.concatenate([pos, v, w], axis=1)
+            if not np.all(np.isfinite(row)):
+                raise _bad_output(outdir / "spheres.txt", None, f"timestep {step}: a position or velocity derived "
+                                  "from the dump is not finite (a value out of range)")
+            rows.append(row)
         if sim.n_planes:  # fix print: steps every, 2·every, ... up to n_steps (the forces evaluated before them)
             planes = _read_rows(outdir / "planes.txt", 1 + 3 * sim.n_planes)
             if not np.array_equal(planes[:, 0], p_steps + max(int(sim.scene.outputs.every), 1)):
