@@ -94,7 +94,7 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
     axes = _array("scene.ellipsoids.axes", e.axes, n, (3,))
     if np.any(axes <= 0):
         k, a = (int(v) for v in np.argwhere(axes <= 0)[0])
-        raise SceneError(f"scene.ellipsoids.axes[{k}, {a}]={axes[k, a]!r} must be > 0; give three positive "
+        raise SceneError(f"scene.ellipsoids.axes[{k}, {a}]={float(axes[k, a])!r} must be > 0; give three positive "
                          "semi-axes per ellipsoid")
     mats = _materials(scene, e, n)
     names = list(scene.materials)

@@ -200,6 +200,14 @@ TOLERANCES = {
         "A difference that is O(θ²) per step with θ ∝ Δt sums to O(Δt) over a contact: halving Δt halves it "
         "(ratio 0.5). ±0.1 separates first order from a Δt-independent model difference (ratio 1) and from "
         "second order (0.25); measured 0.506 (YADE) and 0.490 (LIGGGHTS).", absolute=True, kind="cross-code"),
+    "ellipsoid.sphere-limit": Tolerance(
+        1e-9, "TBD", kind="exact"),
+    "ellipsoid.brute-force": Tolerance(
+        1e-6, "TBD", kind="exact"),
+    "ellipsoid.edge-continuity": Tolerance(
+        1e-9, "TBD", kind="exact"),
+    "ellipsoid.gas-energy": Tolerance(
+        1e-3, "TBD", kind="self-consistency"),
 }
 
 
