@@ -114,30 +114,31 @@ def _cholesky_solve(H, g, lam, s, w):
     k00 = H[0, 0] - lam
     if not k00 > 0.0:
         return False
-    l00 = math.sqrt(k00)
-    l10 = H[1, 0] / l00
-    l20 = H[2, 0] / l00
+    # three square roots and three divisions (the inverse diagonal), then products only
+    i00 = 1.0 / math.sqrt(k00)
+    l10 = H[1, 0] * i00
+    l20 = H[2, 0] * i00
     k11 = H[1, 1] - lam - l10 * l10
     if not k11 > 0.0:
         return False
-    l11 = math.sqrt(k11)
-    l21 = (H[2, 1] - l20 * l10) / l11
+    i11 = 1.0 / math.sqrt(k11)
+    l21 = (H[2, 1] - l20 * l10) * i11
     k22 = H[2, 2] - lam - l20 * l20 - l21 * l21
     if not k22 > 0.0:
         return False
-    l22 = math.sqrt(k22)
+    i22 = 1.0 / math.sqrt(k22)
     # L y = -g
-    y0 = -g[0] / l00
-    y1 = (-g[1] - l10 * y0) / l11
-    y2 = (-g[2] - l20 * y0 - l21 * y1) / l22
+    y0 = -g[0] * i00
+    y1 = (-g[1] - l10 * y0) * i11
+    y2 = (-g[2] - l20 * y0 - l21 * y1) * i22
     # Lᵀ s = y
-    s[2] = y2 / l22
-    s[1] = (y1 - l21 * s[2]) / l11
-    s[0] = (y0 - l10 * s[1] - l20 * s[2]) / l00
+    s[2] = y2 * i22
+    s[1] = (y1 - l21 * s[2]) * i11
+    s[0] = (y0 - l10 * s[1] - l20 * s[2]) * i00
     # L w = s
-    w[0] = s[0] / l00
-    w[1] = (s[1] - l10 * w[0]) / l11
-    w[2] = (s[2] - l20 * w[0] - l21 * w[1]) / l22
+    w[0] = s[0] * i00
+    w[1] = (s[1] - l10 * w[0]) * i11
+    w[2] = (s[2] - l20 * w[0] - l21 * w[1]) * i22
     return True
 
 
@@ -231,10 +232,11 @@ def _potential_problem(ci, Ri, ai, cj, Rj, aj, H, g, M):
     """H = MᵀM, g = Mᵀb of the point of i's surface minimising j's potential:
     M = A_j⁻¹ R_jᵀ R_i A_i, b = A_j⁻¹ R_jᵀ (c_i - c_j).  R row-major (9,)."""
     for r in range(3):
+        ia = 1.0 / aj[r]
         for c in range(3):
             # (R_jᵀ R_i)[r, c] = Σ_k R_j[k, r] R_i[k, c]
             v = Rj[r] * Ri[c] + Rj[3 + r] * Ri[3 + c] + Rj[6 + r] * Ri[6 + c]
-            M[r, c] = v * ai[c] / aj[r]
+            M[r, c] = v * ai[c] * ia
     dx = ci[0] - cj[0]
     dy = ci[1] - cj[1]
     dz = ci[2] - cj[2]
@@ -264,8 +266,8 @@ def _surface(c, R, a, u):
     nx = R[0] * g0 + R[1] * g1 + R[2] * g2
     ny = R[3] * g0 + R[4] * g1 + R[5] * g2
     nz = R[6] * g0 + R[7] * g1 + R[8] * g2
-    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-    return px, py, pz, nx / nn, ny / nn, nz / nn
+    inn = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
+    return px, py, pz, nx * inn, ny * inn, nz * inn
 
 
 @njit
@@ -284,7 +286,8 @@ def curvature_form(R, a, u, t1x, t1y, t1z, t2x, t2y, t2z):
         k11 += b1 * b1 * d
         k12 += b1 * b2 * d
         k22 += b2 * b2 * d
-    return k11 / gl, k12 / gl, k22 / gl
+    igl = 1.0 / gl
+    return k11 * igl, k12 * igl, k22 * igl
 
 
 @njit
@@ -297,10 +300,10 @@ def tangent_basis(nx, ny, nz):
         t1x, t1y, t1z = -nz, 0.0, nx
     else:
         t1x, t1y, t1z = ny, -nx, 0.0
-    tn = math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-    t1x /= tn
-    t1y /= tn
-    t1z /= tn
+    itn = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+    t1x *= itn
+    t1y *= itn
+    t1z *= itn
     return t1x, t1y, t1z, ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
 
 
@@ -334,10 +337,10 @@ def ellipsoid_pair(ci, Ri, ai, cj, Rj, aj, lam_i, lam_j, warm, work, M, H):
     nx = nix - njx
     ny = niy - njy
     nz = niz - njz
-    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-    nx /= nn
-    ny /= nn
-    nz /= nn
+    inn = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
+    nx *= inn
+    ny *= inn
+    nz *= inn
     overlap = (pix - pjx) * nx + (piy - pjy) * ny + (piz - pjz) * nz
     t1x, t1y, t1z, t2x, t2y, t2z = tangent_basis(nx, ny, nz)
     a11, a12, a22 = curvature_form(Ri, ai, u, t1x, t1y, t1z, t2x, t2y, t2z)
