@@ -76,7 +76,7 @@ def _sphere_geometry(pos, r, i, j, reps):
 
 @njit
 def _ellipsoid_geometry(pos, rot, axes, i, j, lam, warm, reps):
-    work = np.zeros((5, 3))
+    work = np.zeros((6, 3))
     M = np.zeros((3, 3))
     H = np.zeros((3, 3))
     acc = 0.0

@@ -30,7 +30,7 @@ def _rot(q) -> np.ndarray:
 
 def _pair(ci, qi, ai, cj, qj, aj, lam=(0.0, 0.0), warm=False):
     return ellipsoid_pair(np.asarray(ci, float), _rot(qi), np.asarray(ai, float), np.asarray(cj, float), _rot(qj),
-                          np.asarray(aj, float), lam[0], lam[1], warm, np.zeros((5, 3)), np.zeros((3, 3)),
+                          np.asarray(aj, float), lam[0], lam[1], warm, np.zeros((6, 3)), np.zeros((3, 3)),
                           np.zeros((3, 3)))
 
 
@@ -148,7 +148,7 @@ def test_hard_case_uses_the_fallback_and_is_right():
     H = np.diag([1.0, 4.0, 9.0])
     g = np.array([0.0, 0.5, 0.0])
     u = np.zeros(3)
-    lam, it = potential_point(H, g, 0.0, False, u, np.zeros(3), np.zeros(3))
+    lam, it = potential_point(H, g, 0.0, False, u, np.zeros(3), np.zeros(3), np.zeros(3))
     assert it == NEWTON_MAX + 1
     assert np.linalg.norm(u) == pytest.approx(1.0, abs=1e-14)
     cand = _fib_sphere(200000)

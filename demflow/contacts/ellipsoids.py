@@ -112,7 +112,7 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
     tri = np.zeros((mt, 9))
     if mt:
         _triangle_pass(pos, ell.rot, ell.axes, ell.amin, pairs, n, nw, tris, tri)
-    work = np.zeros((5, 3))
+    work = np.zeros((6, 3))
     M = np.zeros((3, 3))
     H = np.zeros((3, 3))
     cj = np.zeros(3)

@@ -73,6 +73,8 @@ VERTEX = 2
 
 NEWTON_MAX = 30  # safeguarded Newton steps before the eigen/bisection fallback
 SECULAR_TOL = 1e-14  # | |s| - 1 | accepted by Newton (a unit vector to round-off)
+NEWTON_LAST = 1e-7  # below this | |s| - 1 | the last Newton step reuses the factorisation: s(λ + d) = s + d K⁻¹s,
+                    # truncation O((d/(h - λ))²) ≈ 1e-14
 
 
 # --------------------------------------------------------------------------- mass properties
@@ -108,9 +110,9 @@ def rotations(quat, rot):
 
 # --------------------------------------------------------------------------- the potential point
 @njit
-def _cholesky_solve(H, g, lam, s, w):
-    """Factor K = H - λI = LLᵀ; s = -K⁻¹g, w = L⁻¹s.  Returns False when K is not positive definite
-    (λ ≥ h_min)."""
+def _cholesky_solve(H, g, lam, s, w, z):
+    """Factor K = H - λI = LLᵀ; s = -K⁻¹g, w = L⁻¹s, z = K⁻¹s.  Returns False when K is not positive
+    definite (λ ≥ h_min)."""
     k00 = H[0, 0] - lam
     if not k00 > 0.0:
         return False
@@ -139,6 +141,10 @@ def _cholesky_solve(H, g, lam, s, w):
     w[0] = s[0] * i00
     w[1] = (s[1] - l10 * w[0]) * i11
     w[2] = (s[2] - l20 * w[0] - l21 * w[1]) * i22
+    # Lᵀ z = w
+    z[2] = w[2] * i22
+    z[1] = (w[1] - l21 * z[2]) * i11
+    z[0] = (w[0] - l10 * z[1] - l20 * z[2]) * i00
     return True
 
 
@@ -192,29 +198,42 @@ def _secular_fallback(H, g, u):
 
 
 @njit
-def potential_point(H, g, lam0, warm, u, s, w):
+def potential_point(H, g, lam0, warm, u, s, w, z):
     """The global minimiser u (|u| = 1, written into ``u``) of uᵀHu + 2gᵀu, H symmetric positive
     definite (3, 3), g (3,): safeguarded Newton on the secular equation from λ0 (``warm``) or from
-    the bracket's left end, then the eigen/bisection fallback (module docstring).  ``s``, ``w`` are
-    (3,) work arrays.  Returns (λ, iterations; NEWTON_MAX + 1 when the fallback ran)."""
+    the bracket's left end, then the eigen/bisection fallback (module docstring).  Close to the root
+    (| |s| - 1 | ≤ NEWTON_LAST) the last Newton step reuses the factorisation (s + d K⁻¹s, exact to
+    ~1e-14; a warm start then needs one factorisation).  ``s``, ``w``, ``z`` are (3,) work arrays.
+    Returns (λ, factorisations; NEWTON_MAX + 1 when the fallback ran)."""
     gn = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
     lo = -gn
     hi = min(H[0, 0], min(H[1, 1], H[2, 2]))
     lam = lam0 if (warm and lo < lam0 < hi) else lo
     if gn > 0.0:
         for it in range(NEWTON_MAX):
-            if _cholesky_solve(H, g, lam, s, w):
+            if _cholesky_solve(H, g, lam, s, w, z):
                 sn = math.sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
                 if abs(sn - 1.0) <= SECULAR_TOL:
+                    isn = 1.0 / sn
                     for a in range(3):
-                        u[a] = s[a] / sn
+                        u[a] = s[a] * isn
                     return lam, it + 1
                 if sn < 1.0:
                     lo = lam
                 else:
                     hi = lam
                 wn2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
-                new = lam + sn * sn * (1.0 - sn) / wn2
+                d = sn * sn * (1.0 - sn) / wn2
+                new = lam + d
+                if abs(sn - 1.0) <= NEWTON_LAST and lo < new < hi:
+                    u0 = s[0] + d * z[0]
+                    u1 = s[1] + d * z[1]
+                    u2 = s[2] + d * z[2]
+                    iun = 1.0 / math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+                    u[0] = u0 * iun
+                    u[1] = u1 * iun
+                    u[2] = u2 * iun
+                    return new, it + 1
             else:
                 hi = lam
                 new = hi  # force a bisection
@@ -320,7 +339,7 @@ def ellipsoid_pair(ci, Ri, ai, cj, Rj, aj, lam_i, lam_j, warm, work, M, H):
     """Lin & Ng contact of ellipsoids i and j (module docstring).
 
     ci, cj (3,) centres [length] (j's image), Ri, Rj (9,) rotations, ai, aj (3,) semi-axes; lam_i,
-    lam_j the last step's multipliers (used when ``warm``); work (5, 3), M, H (3, 3) scratch.
+    lam_j the last step's multipliers (used when ``warm``); work (6, 3), M, H (3, 3) scratch.
     Returns (overlap δ (< 0: gap), nx, ny, nz (from i to j), contact point x, y, z, R_e, λ_i, λ_j,
     Newton iterations i + j)."""
     u = work[0]
@@ -328,10 +347,11 @@ def ellipsoid_pair(ci, Ri, ai, cj, Rj, aj, lam_i, lam_j, warm, work, M, H):
     w = work[2]
     g = work[3]
     v = work[4]
+    z = work[5]
     _potential_problem(ci, Ri, ai, cj, Rj, aj, H, g, M)
-    li, iti = potential_point(H, g, lam_i, warm, u, s, w)
+    li, iti = potential_point(H, g, lam_i, warm, u, s, w, z)
     _potential_problem(cj, Rj, aj, ci, Ri, ai, H, g, M)
-    lj, itj = potential_point(H, g, lam_j, warm, v, s, w)
+    lj, itj = potential_point(H, g, lam_j, warm, v, s, w, z)
     pix, piy, piz, nix, niy, niz = _surface(ci, Ri, ai, u)
     pjx, pjy, pjz, njx, njy, njz = _surface(cj, Rj, aj, v)
     nx = nix - njx
