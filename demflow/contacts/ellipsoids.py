@@ -5,7 +5,9 @@ ellipsoids' bounding spheres (radius the largest semi-axis), so every pair that 
 the skin is listed; each listed pair's contact is then found by its geometry
 (:mod:`demflow.shapes.ellipsoid`): the Lin & Ng potential points for two ellipsoids (warm-started
 from the multipliers of the last step, kept in the pair's history row after the law's columns),
-the support point for a plane, the face/edge/vertex test for a triangle.
+the support point for a plane, the face/edge/vertex test for a triangle.  A pair whose bounding
+spheres are apart, or whose extents along the line of centres do not meet (a separating axis), is
+apart without a solve.
 
 Forces: n from i to j, δ the overlap, C the contact point, arms r_i = C - c_i, r_j = C - c_j; the
 tangential history vector (columns 0-2) is rotated into the current tangent plane keeping its
@@ -144,11 +146,21 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
             dy = cj[1] - pos[i, 1]
             dz = cj[2] - pos[i, 2]
             reach = sp.r[i] + sp.r[j]  # bounding spheres apart: no contact, no solve
-            if dx * dx + dy * dy + dz * dz >= reach * reach:
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 >= reach * reach:
                 if pairs.ovl[k] >= 0.0:
                     _clear(pairs, k, -1.0, c0)
                     hist[k, c0] = 0.0
                 pairs.ovl[k] = -1.0
+                continue
+            # separated along the line of centres (their extents along it do not meet): no solve
+            dist = math.sqrt(d2)
+            gap = dist - _extent(ell.rot[i], ell.axes[i], dx, dy, dz, dist) - _extent(ell.rot[j], ell.axes[j], dx, dy,
+                                                                                    dz, dist)
+            if gap >= 0.0:
+                if pairs.ovl[k] >= 0.0:
+                    _clear(pairs, k, -gap, c0)
+                pairs.ovl[k] = -gap
                 continue
             overlap, nx, ny, nz, cx, cy, cz, re, li, lj, it = ellipsoid_pair(
                 pos[i], ell.rot[i], ell.axes[i], cj, ell.rot[j], ell.axes[j], hist[k, c0 + 1], hist[k, c0 + 2],
@@ -255,6 +267,17 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
         if recording:
             energy = law_energy3(law, energy, hist, k, ma, mb, re, overlap)
     return status, energy, iters
+
+
+@njit
+def _extent(R, a, dx, dy, dz, dist):
+    """Half-width of the ellipsoid along the unit vector d/|d| (its support function):
+    √(m_bᵀ A² m_b), m_b = Rᵀ d/|d|."""
+    inv = 1.0 / dist
+    b0 = (R[0] * dx + R[3] * dy + R[6] * dz) * inv * a[0]
+    b1 = (R[1] * dx + R[4] * dy + R[7] * dz) * inv * a[1]
+    b2 = (R[2] * dx + R[5] * dy + R[8] * dz) * inv * a[2]
+    return math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
 
 
 @njit
