@@ -472,3 +472,30 @@ def test_a_settled_ellipsoid_rests_on_its_smallest_axis_and_the_floor_carries_it
     assert sim.bodies.pos[0, 2] == pytest.approx(0.05, abs=1e-4)  # resting on c = 0.05 (Hertz overlap 3.5e-5)
     R = _rot(sim.bodies.quat[0]).reshape(3, 3)
     assert abs(R[2, 2]) > 1 - 1e-6  # the c axis vertical
+
+
+def test_an_ellipsoid_settles_in_a_v_groove_mesh_touching_both_faces():
+    """A triangle-mesh V-groove (faces at ±30°): the ellipsoid comes to rest on both faces (two FACE
+    contacts), the mesh carries its weight, and each face plane is at the ellipsoid's support extent
+    along its normal (√(Σ (a_k (Rᵀm)_k)²), computed here) less a small Hertz overlap."""
+    t = math.radians(30)
+    h = math.tan(t)
+    v = [(-1, -1, h), (0, -1, 0), (0, 1, 0), (-1, 1, h), (1, -1, h), (1, 1, h)]
+    mesh = df.TriangleMesh("groove", v, [(0, 1, 2), (0, 2, 3), (1, 4, 5), (1, 5, 2)], "rock")
+    ax = np.array([0.1, 0.07, 0.05])
+    sc = df.Scene3D(name="groove", spheres=None, materials={"rock": ROCK},
+                    laws={("rock", "rock"): df.HertzMindlinLaw(friction=0.5, restitution=0.3)}, meshes=[mesh],
+                    ellipsoids=df.Ellipsoids(axes=[ax], x=[0.03], y=[0], z=[0.2], material="rock",
+                                             orientation=[[math.cos(0.4), 0.0, math.sin(0.4), 0.0]],
+                                             angular_velocity=[[0.0, 1.0, 2.0]]),
+                    gravity=(0.0, 0.0, -9.81), local_damping=0.3, outputs=df.Outputs3D(every=1000))
+    sim = df.build(sc).run(140000)  # kinetic energy 5e-8 J (from 0.02 J at 20000 steps)
+    W = sim.bodies.mass[0] * 9.81
+    np.testing.assert_allclose(sim.planes.force[0], [0.0, 0.0, -W], atol=2e-4 * W)
+    assert int((sim.pairs.ovl > 0).sum()) == 2
+    R = _rot(sim.bodies.quat[0]).reshape(3, 3)
+    c = sim.bodies.pos[0]
+    for m in (np.array([math.sin(t), 0.0, math.cos(t)]), np.array([-math.sin(t), 0.0, math.cos(t)])):
+        ext = math.sqrt(np.sum((ax * (R.T @ m)) ** 2))
+        overlap = ext - c @ m  # both planes pass through the origin
+        assert 0 < overlap < 1e-3 * ax.min()
