@@ -118,7 +118,8 @@ def per_pair(sim, kind: str, passes: int, rounds: int) -> dict:
     p.hist[:] = hist0
     touching = int((p.ovl > 0).sum())
     return {"seconds_per_pass": t / passes, "spread": spread, "listed": int(p.i.size), "touching": touching,
-            "ns_per_touching_pair": 1e9 * t / passes / max(touching, 1), "ns_per_listed_pair": 1e9 * t / passes / p.i.size}
+            "ns_per_touching_pair": 1e9 * t / passes / max(touching, 1),
+            "ns_per_listed_pair": 1e9 * t / passes / p.i.size}
 
 
 def geometry(sim_s, sim_e, reps: int, rounds: int) -> dict:
@@ -202,7 +203,8 @@ def main():
         lines.append(f"| {k} | {pp['touching']} | {pp['ns_per_touching_pair']:.0f} | {pp['ns_per_listed_pair']:.0f} | "
                      f"{pp['seconds_per_pass'] / s0['pair_pass']['seconds_per_pass']:.1f} | {pp['spread']:.0%} |")
     lines += ["", "## Per pair: the geometry alone (touching ellipsoid pairs, compiled loop)", "",
-              "| particles | pairs | sphere ns | Lin & Ng cold ns | warm ns | factorisations cold / warm | warm × sphere |",
+              "| particles | pairs | sphere ns | Lin & Ng cold ns | warm ns | factorisations cold / warm "
+              "| warm × sphere |",
               "|---|---|---|---|---|---|---|"]
     for k, g in geo.items():
         lines.append(f"| {k} | {g['pairs']} | {g['sphere_ns']:.1f} | {g['cold_ns']:.0f} | {g['warm_ns']:.0f} | "

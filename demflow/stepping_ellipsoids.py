@@ -23,8 +23,8 @@ from .stepping3d import (BLOWUP, DONE, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUIL
 
 
 @njit
-def run_steps_ellipsoids(n_steps, step0, skin, sp, ell, bodies, pairs, planes, tris, ld, law, g, dmp, dt, rec, rec_count,
-                         work):
+def run_steps_ellipsoids(n_steps, step0, skin, sp, ell, bodies, pairs, planes, tris, ld, law, g, dmp, dt, rec,
+                         rec_count, work):
     """Run up to ``n_steps`` steps of an ellipsoid scene from step ``step0``; stop early for a rebuild
     or a blow-up.  :func:`demflow.stepping3d.run_steps3` with the ellipsoid pair pass and every
     particle moved by its body (:func:`demflow.stepping3d.body_step`).

@@ -183,8 +183,9 @@ def test_equivalent_radius_tip_to_tip_matches_eq_46(beta):
 
 def test_equivalent_radius_on_a_plane_is_the_geometric_mean_of_the_principal_radii():
     a, b, c = 0.5, 0.3, 0.2
-    o, *_x, re = ellipsoid_plane(np.array([0.0, 0.0, a - 1e-4]), _rot((math.cos(math.pi / 4), 0, math.sin(math.pi / 4), 0)),
-                                 np.array([a, b, c]), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+    q = (math.cos(math.pi / 4), 0, math.sin(math.pi / 4), 0)
+    o, *_x, re = ellipsoid_plane(np.array([0.0, 0.0, a - 1e-4]), _rot(q), np.array([a, b, c]), 0.0, 0.0, 0.0, 0.0,
+                                 0.0, 1.0)
     # the a-axis turned onto -z: tip contact, R' = b²/a, R'' = c²/a
     assert o == pytest.approx(1e-4, rel=1e-9)
     assert re == pytest.approx(math.sqrt(b * b / a * c * c / a), rel=1e-9)
@@ -208,8 +209,8 @@ def _limit_scenes(law, name):
     common = dict(materials={"rock": ROCK}, laws={("rock", "rock"): law},
                   planes=[df.Plane("floor", (0, 0, 0), (0, 0, 1), "rock")], gravity=(0, 0, -9.81),
                   outputs=df.Outputs3D(every=10), skin=0.01)
-    s = df.Scene3D(name=f"{name}-s", spheres=df.Spheres(x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], radius=r, material="rock",
-                                                       velocity=vel, angular_velocity=w), **common)
+    s = df.Scene3D(name=f"{name}-s", spheres=df.Spheres(x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], radius=r,
+                                                       material="rock", velocity=vel, angular_velocity=w), **common)
     e = df.Scene3D(name=f"{name}-e", spheres=None,
                    ellipsoids=df.Ellipsoids(axes=np.repeat(r[:, None], 3, 1), x=pos[:, 0], y=pos[:, 1], z=pos[:, 2],
                                             material="rock", orientation=q, velocity=vel, angular_velocity=w), **common)
@@ -248,7 +249,8 @@ def test_equal_axes_reproduce_spheres(law):
 def _square_mesh(z=0.0, fold=0.0, half=1.0):
     """Two triangles sharing the edge x = 0 (y from -half to half); the x > 0 one folded down by ``fold``."""
     h = half * math.tan(fold)
-    v = [(-half, -half, z), (0.0, -half, z), (0.0, half, z), (-half, half, z), (half, -half, z - h), (half, half, z - h)]
+    v = [(-half, -half, z), (0.0, -half, z), (0.0, half, z), (-half, half, z), (half, -half, z - h),
+         (half, half, z - h)]
     return df.TriangleMesh("ground", v, [(0, 1, 2), (0, 2, 3), (1, 4, 5), (1, 5, 2)], "rock")
 
 
@@ -304,7 +306,7 @@ def test_triangle_contact_is_continuous_across_a_shared_edge():
     the spacing (continuous), where a step in the force would keep it."""
     q = np.array([0.9, 0.3, -0.2, 0.25]) / np.linalg.norm([0.9, 0.3, -0.2, 0.25])
     xs, F = _force_across(0.0, q, 0.01)
-    xp, Fp = None, []
+    Fp = []
     R = _rot(q).reshape(3, 3)
     z = math.sqrt(np.sum((np.array([0.3, 0.2, 0.12]) * R[2]) ** 2)) - 0.004
     plane = _one_ellipsoid(df.Plane("ground", (0, 0, 0), (0, 0, 1), "rock"), q, z, name="plane-sweep")
@@ -390,13 +392,15 @@ def test_elastic_ellipsoid_gas_conserves_energy_as_overlaps_vanish():
 
 
 # ---------------------------------------------------------------------------- periodic box, checkpoints
+Q1 = np.array([0.9, 0.3, -0.2, 0.25]) / np.linalg.norm([0.9, 0.3, -0.2, 0.25])
+
+
 def _two(x0, x1, box, name):
     return df.Scene3D(name=name, spheres=None, materials={"rock": ROCK},
                       laws={("rock", "rock"): df.HertzMindlinLaw(friction=0.4, restitution=0.5)},
                       ellipsoids=df.Ellipsoids(axes=[[0.3, 0.2, 0.12], [0.25, 0.2, 0.15]], x=[x0, x1], y=[0.1, 0.15],
                                                z=[0.0, 0.05], material="rock",
-                                               orientation=[np.array([0.9, 0.3, -0.2, 0.25]) / np.linalg.norm([0.9, 0.3, -0.2, 0.25]),
-                                                            [0.5, -0.5, 0.5, 0.5]],
+                                               orientation=[Q1, [0.5, -0.5, 0.5, 0.5]],
                                                velocity=[[0.5, 0.0, 0.0], [-0.5, 0.1, 0.0]],
                                                angular_velocity=[[1.0, -2.0, 0.5], [0.0, 3.0, 1.0]]),
                       box=box, skin=0.02, outputs=df.Outputs3D(every=0))
