@@ -8,11 +8,11 @@ from .build import build
 from .simulation import BlowUpError, Simulation
 from .results import Results
 from .laws.hertz_mindlin import HertzMindlinLaw
-from .scene3d import Clumps, Outputs3D, Plane, PlanePhase, PlateServo, Scene3D, Spheres, TriangleMesh
+from .scene3d import Clumps, Ellipsoids, Outputs3D, Plane, PlanePhase, PlateServo, Scene3D, Spheres, TriangleMesh
 from .shapes.clump import ClumpTemplate
 
 __version__ = "0.1.0"
 
 __all__ = ["Scene", "Box", "Discs", "Wall", "Phase", "Servo", "Material", "LinearLaw", "ContactModel",
            "GlobalDamping", "Outputs", "SceneError", "build", "Simulation", "BlowUpError", "Results",
-           "Scene3D", "Spheres", "Plane", "PlanePhase", "PlateServo", "Outputs3D", "HertzMindlinLaw", "TriangleMesh", "Clumps", "ClumpTemplate"]
+           "Scene3D", "Spheres", "Plane", "PlanePhase", "PlateServo", "Outputs3D", "HertzMindlinLaw", "TriangleMesh", "Clumps", "ClumpTemplate", "Ellipsoids"]

@@ -123,9 +123,106 @@ def _clumps(c, index, first: int):
     return bodies, members
 
 
+def _law_family(scene, mats, names, index, walls):
+    """The law family of every pair of materials that can meet (particles of ``mats``, the walls):
+    (family, compiled params, 3D history width)."""
+    plane_mats = [p.material for p in walls]
+    used = sorted(set(mats), key=names.index)
+    pairs = {}
+    count = {m: mats.count(m) for m in used}
+    for a in used:
+        for b in used:  # sphere pairs that exist (a lone sphere of a material never meets its own kind)
+            if names.index(b) < names.index(a) or (a == b and count[a] < 2):
+                continue
+            pairs[(a, b)] = scene.law_for(a, b)
+        for b in plane_mats:
+            if (a, b) not in pairs and (b, a) not in pairs:
+                pairs[(a, b)] = scene.law_for(a, b)
+    fams = {f for f in FAMILIES_3D for law in pairs.values() if f.accepts(law)}
+    if len(fams) != 1:
+        raise SceneError(f"scene {scene.name!r} mixes contact-law families ({sorted(f.name for f in fams)}) or has "
+                         "a law no 3D family implements; give every pair a LinearLaw or every pair a "
+                         "HertzMindlinLaw")
+    family = fams.pop()(scene, pairs, index)
+    params = family.params()
+    width = family.history_width(3)
+
+    return family, params, width
+
+
+def _walls(scene, walls, index):
+    """Planes3 (planes, then meshes), Triangles3 and Loading3 of the scene's wall bodies."""
+    plane_mats = [p.material for p in walls]
+    # wall bodies: planes (point, unit normal), then meshes (reference point = first vertex)
+    npl = len(walls)
+    point = np.array([p.point if not hasattr(p, "triangles") else np.asarray(p.vertices, np.float64)[0]
+                      for p in walls], np.float64).reshape(npl, 3)
+    normal = np.array([p.normal if not hasattr(p, "triangles") else (0.0, 0.0, 0.0) for p in walls],
+                      np.float64).reshape(npl, 3)
+    is_mesh = np.array([hasattr(p, "triangles") for p in walls], np.int8)
+    for q in range(npl):
+        if not is_mesh[q]:
+            normal[q] /= np.linalg.norm(normal[q])
+    planes = Planes3(point=point, normal=normal, vel=np.zeros((npl, 3)),
+                     mat=np.array([index[m] for m in plane_mats], np.int64), force=np.zeros((npl, 3)),
+                     ref=point.copy(), is_mesh=is_mesh)
+    tv, tw = [], []
+    for q, w in enumerate(walls):
+        if is_mesh[q]:
+            v = np.asarray(w.vertices, np.float64)
+            t = np.asarray(w.triangles, np.int64)
+            tv.append(np.concatenate([v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]], axis=1))
+            tw.append(np.full(len(t), q, np.int64))
+    tris = Triangles3(v=np.concatenate(tv) if tv else np.zeros((0, 9)),
+                      wall=np.concatenate(tw) if tw else np.zeros(0, np.int64))
+    K = max([len(p.phases) for p in walls] + [1])
+    ps = np.zeros((npl, K), np.int64)
+    pe = np.zeros((npl, K), np.int64)
+    pv = np.zeros((npl, K, 3))
+    for q, p in enumerate(walls):
+        t = 0
+        for k, ph in enumerate(p.phases):
+            ps[q, k] = t
+            t += int(ph.cycles)
+            pe[q, k] = t
+            pv[q, k] = ph.velocity
+    servo = [getattr(p, "servo", None) for p in walls]
+    loading = Loading3(phase_start=ps, phase_end=pe, phase_v=pv,
+                       servo_on=np.array([sv is not None for sv in servo], np.int8),
+                       servo_start=np.array([sv.start if sv else 0 for sv in servo], np.int64),
+                       servo_F=np.array([sv.force if sv else 1.0 for sv in servo]),
+                       servo_G=np.array([sv.gain if sv else 0.0 for sv in servo]),
+                       servo_vmax=np.array([sv.v_max if sv else 0.0 for sv in servo]))
+
+    return planes, tris, loading
+
+
+def _skin_and_box(scene, r):
+    """The neighbour-list skin and the Box3, refusing periods shorter than twice the reach (``r``:
+    the particles' (bounding) radii)."""
+    skin = float(scene.skin) if scene.skin is not None else 0.2 * float(r.mean())
+    b = scene.box
+    lx = (b.periodic_x[1] - b.periodic_x[0]) if b.periodic_x else 0.0
+    ly = (b.periodic_y[1] - b.periodic_y[0]) if b.periodic_y else 0.0
+    box = Box3(periodic_x=b.periodic_x is not None, periodic_y=b.periodic_y is not None,
+               x0=b.periodic_x[0] if b.periodic_x else 0.0, y0=b.periodic_y[0] if b.periodic_y else 0.0,
+               lx=float(lx), ly=float(ly))
+    reach = 2.0 * float(r.max()) + skin
+    for axis, length in (("x", lx), ("y", ly)):
+        if length and length <= 2.0 * reach:
+            raise SceneError(f"scene.box.periodic_{axis}: the period {length:.6g} must exceed twice the reach "
+                             f"2·r_max + skin = {reach:.6g} (minimum image); widen the box or reduce the skin")
+
+    return skin, box
+
+
 def build3d(scene: Scene3D) -> Simulation3D:
     """Check ``scene`` and return a :class:`Simulation3D` ready to run."""
     check_scene3d(scene)
+    if scene.ellipsoids is not None:
+        from .ellipsoids3d import build_ellipsoids
+
+        return build_ellipsoids(scene)
     s = scene.spheres if scene.spheres is not None else Spheres(x=[], y=[], z=[], radius=[], material=[])
     n = _common_length("scene.spheres", s, ("x", "y", "z", "radius"))
     if n == 0 and (scene.clumps is None or len(scene.clumps) == 0):
@@ -186,82 +283,10 @@ def build3d(scene: Scene3D) -> Simulation3D:
     quat = np.zeros((n, 4))
     quat[:, 0] = 1.0
 
-    # laws: every pair of materials that can meet
     walls = list(scene.planes) + list(scene.meshes)  # wall bodies: planes, then meshes
-    plane_mats = [p.material for p in walls]
-    used = sorted(set(mats), key=names.index)
-    pairs = {}
-    count = {m: mats.count(m) for m in used}
-    for a in used:
-        for b in used:  # sphere pairs that exist (a lone sphere of a material never meets its own kind)
-            if names.index(b) < names.index(a) or (a == b and count[a] < 2):
-                continue
-            pairs[(a, b)] = scene.law_for(a, b)
-        for b in plane_mats:
-            if (a, b) not in pairs and (b, a) not in pairs:
-                pairs[(a, b)] = scene.law_for(a, b)
-    fams = {f for f in FAMILIES_3D for law in pairs.values() if f.accepts(law)}
-    if len(fams) != 1:
-        raise SceneError(f"scene {scene.name!r} mixes contact-law families ({sorted(f.name for f in fams)}) or has "
-                         "a law no 3D family implements; give every pair a LinearLaw or every pair a "
-                         "HertzMindlinLaw")
-    family = fams.pop()(scene, pairs, index)
-    params = family.params()
-    width = family.history_width(3)
-
-    # wall bodies: planes (point, unit normal), then meshes (reference point = first vertex)
-    npl = len(walls)
-    point = np.array([p.point if not hasattr(p, "triangles") else np.asarray(p.vertices, np.float64)[0]
-                      for p in walls], np.float64).reshape(npl, 3)
-    normal = np.array([p.normal if not hasattr(p, "triangles") else (0.0, 0.0, 0.0) for p in walls],
-                      np.float64).reshape(npl, 3)
-    is_mesh = np.array([hasattr(p, "triangles") for p in walls], np.int8)
-    for q in range(npl):
-        if not is_mesh[q]:
-            normal[q] /= np.linalg.norm(normal[q])
-    planes = Planes3(point=point, normal=normal, vel=np.zeros((npl, 3)),
-                     mat=np.array([index[m] for m in plane_mats], np.int64), force=np.zeros((npl, 3)),
-                     ref=point.copy(), is_mesh=is_mesh)
-    tv, tw = [], []
-    for q, w in enumerate(walls):
-        if is_mesh[q]:
-            v = np.asarray(w.vertices, np.float64)
-            t = np.asarray(w.triangles, np.int64)
-            tv.append(np.concatenate([v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]], axis=1))
-            tw.append(np.full(len(t), q, np.int64))
-    tris = Triangles3(v=np.concatenate(tv) if tv else np.zeros((0, 9)),
-                      wall=np.concatenate(tw) if tw else np.zeros(0, np.int64))
-    K = max([len(p.phases) for p in walls] + [1])
-    ps = np.zeros((npl, K), np.int64)
-    pe = np.zeros((npl, K), np.int64)
-    pv = np.zeros((npl, K, 3))
-    for q, p in enumerate(walls):
-        t = 0
-        for k, ph in enumerate(p.phases):
-            ps[q, k] = t
-            t += int(ph.cycles)
-            pe[q, k] = t
-            pv[q, k] = ph.velocity
-    servo = [getattr(p, "servo", None) for p in walls]
-    loading = Loading3(phase_start=ps, phase_end=pe, phase_v=pv,
-                       servo_on=np.array([sv is not None for sv in servo], np.int8),
-                       servo_start=np.array([sv.start if sv else 0 for sv in servo], np.int64),
-                       servo_F=np.array([sv.force if sv else 1.0 for sv in servo]),
-                       servo_G=np.array([sv.gain if sv else 0.0 for sv in servo]),
-                       servo_vmax=np.array([sv.v_max if sv else 0.0 for sv in servo]))
-
-    skin = float(scene.skin) if scene.skin is not None else 0.2 * float(r.mean())
-    b = scene.box
-    lx = (b.periodic_x[1] - b.periodic_x[0]) if b.periodic_x else 0.0
-    ly = (b.periodic_y[1] - b.periodic_y[0]) if b.periodic_y else 0.0
-    box = Box3(periodic_x=b.periodic_x is not None, periodic_y=b.periodic_y is not None,
-               x0=b.periodic_x[0] if b.periodic_x else 0.0, y0=b.periodic_y[0] if b.periodic_y else 0.0,
-               lx=float(lx), ly=float(ly))
-    reach = 2.0 * float(r.max()) + skin
-    for axis, length in (("x", lx), ("y", ly)):
-        if length and length <= 2.0 * reach:
-            raise SceneError(f"scene.box.periodic_{axis}: the period {length:.6g} must exceed twice the reach "
-                             f"2·r_max + skin = {reach:.6g} (minimum image); widen the box or reduce the skin")
+    family, params, width = _law_family(scene, mats, names, index, walls)
+    planes, tris, loading = _walls(scene, walls, index)
+    skin, box = _skin_and_box(scene, r)
 
     # the critical time step
     inertia = 0.4 * mass * r ** 2
@@ -278,7 +303,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
         dt_crit = rayleigh_time_step(r, m_rho, E, nu)
         how = "the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766)"
     else:
-        kmax = max(max(law.kn, law.ks) for law in pairs.values())
+        kmax = max(max(law.kn, law.ks) for law in family.laws_by_pair.values())
         dt_crit = 2.0 * math.sqrt(float(mass.min()) / kmax)
         how = "2√(m_min/k_max)"
     if scene.dt is None:

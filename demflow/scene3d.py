@@ -75,6 +75,32 @@ class Clumps:
         return len(self.x) if hasattr(self.x, "__len__") and not isinstance(self.x, (str, bytes)) else 1
 
 
+@dataclass
+class Ellipsoids:
+    """Ellipsoids (Miyata §2.4, eq 43): each a rigid body with semi-axes a1, a2, a3 along its body axes.
+
+    axes : (n, 3) semi-axes [length], each > 0 (equal axes: a sphere)
+    x, y, z : centres [length]
+    material : a material name, or one per ellipsoid; the mass is 4/3 π a1 a2 a3 ρ, the principal
+               moments m(a2² + a3²)/5, m(a1² + a3²)/5, m(a1² + a2²)/5
+    orientation : optional (n, 4) unit quaternions (w, x, y, z), body frame to world (default: identity)
+    velocity, angular_velocity : optional (n, 3) at the half step (angular velocity in the world frame)
+    A scene with ellipsoids has no spheres or clumps (one particle family per scene).
+    """
+
+    axes: Sequence[Sequence[float]]
+    x: Sequence[float]
+    y: Sequence[float]
+    z: Sequence[float]
+    material: Sequence[str] | str
+    orientation: Sequence[Sequence[float]] | None = None
+    velocity: Sequence[Sequence[float]] | None = None
+    angular_velocity: Sequence[Sequence[float]] | None = None
+
+    def __len__(self) -> int:
+        return len(self.x) if hasattr(self.x, "__len__") and not isinstance(self.x, (str, bytes)) else 1
+
+
 @dataclass(frozen=True)
 class PlanePhase:
     """One phase of a plane's prescribed translation: ``velocity`` (vx, vy, vz) for ``cycles`` steps."""
@@ -183,6 +209,7 @@ class Scene3D:
     box: Box = Box()
     description: str = ""
     clumps: Clumps | None = None
+    ellipsoids: Ellipsoids | None = None
 
     def law_for(self, a: str, b: str):
         """The law of a material pair, in either order; a clear error if none is declared."""
@@ -249,6 +276,9 @@ def check_scene3d(scene: Scene3D) -> None:
         check_whole(f"scene.outputs.snapshots[{k}]", st)
     check_items("scene.outputs.track_spheres", o.track_spheres)
     n_spheres = 0 if scene.spheres is None else len(scene.spheres)
+    if scene.ellipsoids is not None:
+        check_type("scene.ellipsoids", scene.ellipsoids, Ellipsoids)
+        n_spheres = len(scene.ellipsoids)
     for k, i in enumerate(o.track_spheres):
         check_whole(f"scene.outputs.track_spheres[{k}]", i, le=max(n_spheres - 1, 0))
         if n_spheres == 0:

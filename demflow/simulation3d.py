@@ -146,9 +146,7 @@ class Simulation3D:
             rec_count = 0
             while self.step < stop:
                 t0 = time.perf_counter()
-                done, status, rec_count = run_steps3(
-                    stop - self.step, self.step, self.skin, self.spheres, self.bodies, self.pairs, self.planes,
-                    self.tris, self.loading, self.law_params, self.g, self.damping, self.dt, rec, rec_count, self.work)
+                done, status, rec_count = self._advance(stop - self.step, rec, rec_count)
                 self.dem_s += time.perf_counter() - t0
                 self.step += done
                 bar.update(done)
@@ -172,6 +170,12 @@ class Simulation3D:
         if checkpoint is not None:
             self.save_checkpoint(checkpoint)
         return self
+
+    def _advance(self, n_steps: int, rec: Records3, rec_count: int):
+        """One call of the compiled cycle: (steps done, status, records written)."""
+        return run_steps3(n_steps, self.step, self.skin, self.spheres, self.bodies, self.pairs, self.planes,
+                          self.tris, self.loading, self.law_params, self.g, self.damping, self.dt, rec, rec_count,
+                          self.work)
 
     def _check_run_length(self, n_steps) -> None:
         """Refuse up front a run whose records would not fit in memory (they grow with what is recorded,

@@ -109,3 +109,11 @@ def empty_pairs3(width: int) -> Pairs3:
     i0 = np.empty(0, np.int64)
     return Pairs3(i=i0, j=i0.copy(), hist=np.zeros((0, width)), shift=np.zeros((0, 3)), fn=np.zeros(0),
                   ft=np.zeros((0, 3)), ovl=np.zeros(0), slide=np.zeros(0, np.int8))
+
+Ellipsoids3 = namedtuple("Ellipsoids3", [
+    # ellipsoids (each its own rigid body in Bodies3, with one particle row in Spheres3 whose radius
+    # is the bounding radius, the largest semi-axis)
+    "axes",  # (n, 3) semi-axes a1, a2, a3 along the body axes [length]
+    "amin",  # (n,) smallest semi-axis [length] (blow-up test, dedup tolerance)
+    "rot",   # (n, 9) row-major rotation body -> world of this step (from Bodies3.quat)
+])

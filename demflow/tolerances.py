@@ -213,6 +213,39 @@ TOLERANCES = {
         "A difference that is O(θ²) per step with θ ∝ Δt sums to O(Δt) over a contact: halving Δt halves it "
         "(ratio 0.5). ±0.1 separates first order from a Δt-independent model difference (ratio 1) and from "
         "second order (0.25); measured 0.506 (YADE) and 0.490 (LIGGGHTS).", absolute=True, kind="cross-code"),
+    "ellipsoid.sphere-limit": Tolerance(
+        1e-10,
+        "Ellipsoids with a = b = c (random orientations) against the sphere code on a 27-sphere jittered packing on a "
+        "floor (tests/test_ellipsoid.py): forces, moments and overlaps of one pass, and 300 steps of motion, differ by "
+        "round-off only (measured ≤ 1.6e-13 of the largest moment, 7e-14 relative overlap, 9e-14 positions after 300 "
+        "steps, Hertz and linear). 1e-10 leaves 600x; Miyata's eq 48 read literally (R_e = 1/√(AB) = 2R* for "
+        "spheres) is a √2 difference in the Hertz force, and any geometric error of the solver is O(δ).", kind="exact"),
+    "ellipsoid.brute-force": Tolerance(
+        1e-6,
+        "Lin & Ng potential points of the kernel against dense surface sampling refined by scipy BFGS on the "
+        "spherical angles (40 Hypothesis examples, semi-axes 0.3-1, random orientations, overlapping and apart): "
+        "measured ≤ 2.2e-9 on δ/a_max, 2.0e-8 on the normal, 1.2e-8 on the contact point / a_max — the optimiser's "
+        "resolution (a minimiser's position is found to ~√ε of the objective). 1e-6 leaves 50x and fails a wrong "
+        "branch of the secular equation (a local, not global, minimiser: O(a)).", kind="exact"),
+    "ellipsoid.edge-continuity": Tolerance(
+        1e-9,
+        "Ellipsoid on a flat two-triangle mesh vs the analytic plane: identical forces at every position (measured "
+        "0.0: face contacts of either triangle), and with the contact point 1e-11 off one triangle (its EDGE contact) "
+        "the overlap agrees to 2e-14 relative and the normal to ~1e-11 (the support point is a stationary point of "
+        "the line's penetration, so the EDGE overlap differs from the FACE overlap at second order in the offset). "
+        "A missed edge contact or a double count is O(1).", kind="exact"),
+    "ellipsoid.sphere-gas-energy": Tolerance(
+        2e-5,
+        "Elastic gas of 27 equal-axis ellipsoids (linear kn = 2e6, Δt = 2e-5 s, 0.3 s): largest |E - E0|/E0 "
+        "measured 8.0e-6 at Δt and 2.0e-6 at Δt/2 (the leapfrog's O(Δt²), ratio 4.0); 2e-5 is 2.5x the Δt value.",
+        kind="exact"),
+    "ellipsoid.gas-energy": Tolerance(
+        2e-3,
+        "Elastic gas of 27 ellipsoids (semi-axes 6-11 cm, linear kn = 2e6, 0.3 s): largest |E - E0|/E0 measured "
+        "9.13e-4, 9.08e-4, 9.08e-4 at Δt = 2e-5, 1e-5, 5e-6 s (Δt-converged: not the integrator's error) and "
+        "9.1e-4, 2.9e-4, 5.4e-5 at kn = 2e6, 2e7, 2e8 (peak overlaps 5.5, 1.8, 0.55 mm): the Lin & Ng contact "
+        "force is the gradient of its overlap only to O(δ/R), so energy is conserved in the rigid limit. 2e-3 is "
+        "2.2x the kn = 2e6 value.", kind="self-consistency"),
 }
 
 

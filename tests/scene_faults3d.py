@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from demflow import (Box, ClumpTemplate, Clumps, HertzMindlinLaw, Material, Outputs3D, Plane, PlanePhase,
+from demflow import (Box, ClumpTemplate, Clumps, Ellipsoids, HertzMindlinLaw, Material, Outputs3D, Plane, PlanePhase,
                      PlateServo, Scene3D, Spheres, TriangleMesh)
 from demflow.scene import GlobalDamping
 
@@ -232,6 +232,34 @@ def _(pick):
     return sc, f"scene.clumps.{key}", v
 
 
+def base3d_ellipsoids() -> Scene3D:
+    """Two ellipsoids over a floor under a mesh ramp, periodic x/y (the ellipsoid family of the 3D scene)."""
+    sc = base3d()
+    return replace(sc, spheres=None, clumps=None, planes=sc.planes[:1], outputs=Outputs3D(every=2, track_spheres=(0,)),
+                   ellipsoids=Ellipsoids(axes=[[0.012, 0.01, 0.008], [0.01, 0.01, 0.01]], x=[0.03, 0.07], y=[0.05, 0.05],
+                                         z=[0.03, 0.03], material="g", orientation=[[1.0, 0.0, 0.0, 0.0]] * 2,
+                                         velocity=[[0.0, 0.0, -0.1]] * 2, angular_velocity=[[0.0, 1.0, 0.0]] * 2))
+
+
+@fault3d("3d ellipsoids", "ellipsoid field")
+def _(pick):
+    key = pick(["axes", "x", "y", "z", "orientation", "velocity", "angular_velocity", "material", "family"])
+    sc = base3d_ellipsoids()
+    if key == "family":  # the scene entry itself: not an Ellipsoids
+        v = pick([5, "ellipsoids", [1.0, 2.0]])
+        return replace(sc, ellipsoids=v), "scene.ellipsoids", v
+    v = {"axes": pick([[[0.01, 0.01, 0.0], [0.01] * 3], [[0.01, 0.01]] * 2, [[NAN, 0.01, 0.01]] * 2,
+                       [[0.01, -0.01, 0.01]] * 2, "abc", [[0.01, "a", 0.01]] * 2]),
+         "x": pick([[NAN, 0.07], [0.03], "ab"]), "y": pick([[0.05, INF], [0.05], None]),
+         "z": pick([[0.03, "a"], [0.03, 0.03, 0.03]]),
+         "orientation": pick([[[1.0, 0.0, 0.0, 0.0], [2.0, 0.0, 0.0, 0.0]], [[1.0, 0.0, 0.0]] * 2, [[NAN, 0, 0, 1]] * 2]),
+         "velocity": pick([[[0.0, 0.0]] * 2, [[INF, 0.0, 0.0]] * 2]),
+         "angular_velocity": pick([[[0.0, NAN, 0.0]] * 2, [[0.0] * 3]]),
+         "material": pick(["nope", None, ["g"]])}[key]
+    sc.ellipsoids = _set(sc.ellipsoids, **{key: v})
+    return sc, f"scene.ellipsoids.{key}", v
+
+
 @fault3d("3d outputs", "outputs")
 def _(pick):
     key = pick(["every", "snapshots", "track_spheres", "orientation"])
@@ -257,6 +285,7 @@ CATEGORIES3D = sorted({f.category for f in FAULTS3D})
 def field_paths3d() -> list[str]:
     """Every dataclass field of the 3D scene objects (for the coverage test)."""
     out = []
-    for cls in (Scene3D, Spheres, Plane, PlanePhase, PlateServo, TriangleMesh, Clumps, Outputs3D, HertzMindlinLaw):
+    for cls in (Scene3D, Spheres, Plane, PlanePhase, PlateServo, TriangleMesh, Clumps, Ellipsoids, Outputs3D,
+                HertzMindlinLaw):
         out += [f"{cls.__name__}.{f.name}" for f in dataclasses.fields(cls)]
     return out

@@ -314,10 +314,11 @@ def test_every_invalid_3d_scene_is_refused_naming_its_field(category, data):
 
 
 def test_the_3d_base_scene_is_valid():
-    """Negative control: without a fault the 3D base scene builds and runs."""
-    sim = build(sf3.base3d())
-    sim.run()
-    assert sim.step == sim.scene.n_steps
+    """Negative control: without a fault the 3D base scenes (spheres and clumps; ellipsoids) build and run."""
+    for scene in (sf3.base3d(), sf3.base3d_ellipsoids()):
+        sim = build(scene)
+        sim.run()
+        assert sim.step == sim.scene.n_steps
 
 
 def test_every_field_of_every_3d_scene_object_is_fuzzed_or_derived():
@@ -331,7 +332,8 @@ def test_every_field_of_every_3d_scene_object_is_fuzzed_or_derived():
             paths.add(f.make(rng.choice)[1])
     text = "\n".join(paths)
     where = {"Scene3D": "scene.", "Spheres": "scene.spheres.", "Plane": "].", "PlanePhase": "].", "PlateServo": "servo.",
-             "TriangleMesh": "].", "Clumps": "clumps.", "Outputs3D": "outputs.", "HertzMindlinLaw": "]."}
+             "TriangleMesh": "].", "Clumps": "clumps.", "Ellipsoids": "ellipsoids.", "Outputs3D": "outputs.",
+             "HertzMindlinLaw": "]."}
     derived = {
         "Scene3D.damping", "Scene3D.contact_model",  # GlobalDamping and ContactModel: the 2D objects, fuzzed
         # by tests/scene_faults.py and checked by the same methods

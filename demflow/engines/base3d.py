@@ -59,6 +59,10 @@ def scene3d_numbers(scene, sim) -> dict:
     from ..laws.hertz_mindlin import CAP_TOTAL, SHEAR_TOTAL, TANGENTIAL_MD, TANGENTIAL_MINDLIN, HertzParams
 
     check_identifier("scene", scene.name)
+    if getattr(scene, "ellipsoids", None) is not None:
+        raise EngineUnsupported(
+            f"scene {scene.name!r} has ellipsoids; the 3D engine decks write spheres only (neither deck expresses "
+            "the Lin & Ng ellipsoid contact): run it in demflow")
     names = [check_identifier("material", m) for m in scene.materials]
     law = sim.law_params
     if not isinstance(law, HertzParams):

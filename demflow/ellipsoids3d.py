@@ -1,0 +1,203 @@
+"""Build and run a 3D scene of ellipsoids (Miyata §2.4): :func:`build_ellipsoids` and
+:class:`SimulationEllipsoids`.
+
+:func:`demflow.build.build` calls :func:`build_ellipsoids` for a :class:`demflow.scene3d.Scene3D`
+with ``ellipsoids``.  Each ellipsoid is a rigid body (:class:`demflow.state3d.Bodies3`: the closed-form
+mass and principal moments of :func:`demflow.shapes.ellipsoid.ellipsoid_mass_properties`) with one
+particle row (:class:`demflow.state3d.Spheres3`, radius = its bounding radius, the largest semi-axis,
+which the neighbour list and the step-length test use) at its centre; the rotations, semi-axes and
+smallest semi-axes are an :class:`demflow.state3d.Ellipsoids3`.  Walls, laws, damping, box and
+records are the sphere scene's; the compiled cycle is
+:func:`demflow.stepping_ellipsoids.run_steps_ellipsoids`.  Not (yet) supported with ellipsoids:
+spheres or clumps in the same scene, fixed ellipsoids, adaptive damping.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .build3d import _array, _common_length, _law_family, _skin_and_box, _walls, quat_to_matrix, rayleigh_time_step
+from .contacts.ellipsoids import WARM_COLUMNS
+from .laws.hertz_mindlin import HertzMindlin
+from .scene import SceneError, type_phrase
+from .shapes.ellipsoid import rotations
+from .simulation3d import Simulation3D
+from .state3d import Bodies3, Damping3, Ellipsoids3, Records3, Spheres3
+from .stepping3d import MAX_OVERLAP_RATIO
+
+
+class SimulationEllipsoids(Simulation3D):
+    """A built ellipsoid scene (module docstring).  ``ell`` holds the semi-axes and rotations;
+    ``bodies`` the rigid-body state (orientation quaternions, angular momentum); ``spheres`` one row
+    per ellipsoid (centre, velocity, contact force and moment sums).  ``work[2]`` counts the Newton
+    iterations of the contact solves."""
+
+    def __init__(self, *, ellipsoids, **kw):
+        self.ell = ellipsoids
+        super().__init__(**kw)
+        self.work = np.zeros(3)
+
+    def _advance(self, n_steps: int, rec: Records3, rec_count: int):
+        from .stepping_ellipsoids import run_steps_ellipsoids
+
+        return run_steps_ellipsoids(n_steps, self.step, self.skin, self.spheres, self.ell, self.bodies, self.pairs,
+                                    self.planes, self.tris, self.loading, self.law_params, self.g, self.damping,
+                                    self.dt, rec, rec_count, self.work)
+
+    def tables(self, include_records: bool = True) -> dict:
+        """As :meth:`Simulation3D.tables`; the ``spheres`` table (also under ``ellipsoids``) carries
+        the bodies' orientations and the semi-axes a1, a2, a3 (``r`` is the bounding radius)."""
+        self.spheres.quat[:] = self.bodies.quat
+        out = super().tables(include_records)
+        t = out["spheres"]
+        for a in range(3):
+            t[f"a{a + 1}"] = self.ell.axes[:, a]
+        out["ellipsoids"] = t
+        return out
+
+
+def _materials(scene, e, n):
+    if isinstance(e.material, str):
+        mats = [e.material] * n
+    elif isinstance(e.material, (list, tuple, np.ndarray)):
+        mats = list(e.material)
+    else:
+        raise SceneError(f"scene.ellipsoids.material={e.material!r} is {type_phrase(e.material)}; give a material "
+                         "name or one per ellipsoid")
+    if len(mats) != n:
+        raise SceneError(f"scene.ellipsoids.material has {len(mats)} entries for {n} ellipsoids; give one per "
+                         "ellipsoid or one name for all")
+    for k, m in enumerate(mats):
+        if not isinstance(m, str) or m not in scene.materials:
+            raise SceneError(f"scene.ellipsoids.material[{k}]={m!r} is not declared; add it to scene.materials")
+    return mats
+
+
+def build_ellipsoids(scene) -> SimulationEllipsoids:
+    """Check an ellipsoid scene (already through :func:`demflow.scene3d.check_scene3d`) and return a
+    :class:`SimulationEllipsoids` ready to run.  Errors name the field, the value, the rule and the fix."""
+    e = scene.ellipsoids
+    if scene.spheres is not None and len(scene.spheres):
+        raise SceneError("scene.spheres is given with scene.ellipsoids; a scene has one particle family: give "
+                         "spheres=None (or model the spheres as ellipsoids with equal axes)")
+    if scene.clumps is not None:
+        raise SceneError("scene.clumps is given with scene.ellipsoids; a scene has one particle family: give "
+                         "clumps=None")
+    if scene.adaptive_damping:
+        raise SceneError("scene.adaptive_damping=True is not implemented for ellipsoids; give False and use "
+                         "scene.damping or scene.local_damping")
+    n = _common_length("scene.ellipsoids", e, ("x", "y", "z"))
+    if n == 0:
+        raise SceneError("scene.ellipsoids has no ellipsoids; give at least one centre or leave ellipsoids=None")
+    pos = np.stack([_array(f"scene.ellipsoids.{a}", getattr(e, a), n) for a in "xyz"], axis=1)
+    axes = _array("scene.ellipsoids.axes", e.axes, n, (3,))
+    if np.any(axes <= 0):
+        k, a = (int(v) for v in np.argwhere(axes <= 0)[0])
+        raise SceneError(f"scene.ellipsoids.axes[{k}, {a}]={float(axes[k, a])!r} must be > 0; give three positive "
+                         "semi-axes per ellipsoid")
+    mats = _materials(scene, e, n)
+    names = list(scene.materials)
+    index = {m: k for k, m in enumerate(names)}
+    mat = np.array([index[m] for m in mats], np.int64)
+    rho = np.array([scene.materials[m].density for m in mats], np.float64)
+    mass = rho * 4.0 / 3.0 * math.pi * axes.prod(axis=1)
+    if np.any(mass <= 0):
+        k = int(np.argmax(mass <= 0))
+        raise SceneError(f"scene.materials[{mats[k]!r}].density (ellipsoid {k}) gives mass {mass[k]!r}; a mass "
+                         "must be > 0: give a positive density")
+    a2 = axes ** 2
+    moments = mass[:, None] / 5.0 * np.stack([a2[:, 1] + a2[:, 2], a2[:, 0] + a2[:, 2], a2[:, 0] + a2[:, 1]], axis=1)
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)) if e.orientation is None else \
+        _array("scene.ellipsoids.orientation", e.orientation, n, (4,))
+    norm = np.linalg.norm(q, axis=1)
+    if np.any(np.abs(norm - 1.0) > 1e-9):
+        k = int(np.argmax(np.abs(norm - 1.0)))
+        raise SceneError(f"scene.ellipsoids.orientation[{k}] has norm {norm[k]:.12g}; give unit quaternions "
+                         "(w, x, y, z)")
+    q = q / norm[:, None]
+    vel = np.zeros((n, 3)) if e.velocity is None else _array("scene.ellipsoids.velocity", e.velocity, n, (3,))
+    w = (np.zeros((n, 3)) if e.angular_velocity is None
+         else _array("scene.ellipsoids.angular_velocity", e.angular_velocity, n, (3,)))
+    R = quat_to_matrix(q)
+    L = np.einsum("bij,bj->bi", R, moments * np.einsum("bji,bj->bi", R, w))  # L = R I Rᵀ ω
+    bodies = Bodies3(pos=pos.copy(), vel=vel.copy(), L=L, angvel=w.copy(), quat=q.copy(), mass=mass.copy(),
+                     moments=moments, start=np.arange(n + 1, dtype=np.int64), offset=np.zeros((n, 3)))
+    r = axes.max(axis=1)
+    amin = axes.min(axis=1)
+
+    walls = list(scene.planes) + list(scene.meshes)
+    family, params, width = _law_family(scene, mats, names, index, walls)
+    planes, tris, loading = _walls(scene, walls, index)
+    skin, box = _skin_and_box(scene, r)
+
+    if isinstance(family, HertzMindlin):
+        E = np.array([scene.materials[m].young for m in mats], np.float64)
+        nu = np.array([scene.materials[m].poisson for m in mats], np.float64)
+        if not np.all(np.isfinite(E)):
+            k = int(np.argmax(~np.isfinite(E)))
+            raise SceneError(f"ellipsoid {k} has material {mats[k]!r} with young={E[k]}: only a plane can be rigid; "
+                             "give the ellipsoids' material a finite Young's modulus")
+        # the Rayleigh time of a sphere of the smallest semi-axis and the material's density (conservative)
+        dt_crit = rayleigh_time_step(amin, rho * 4.0 / 3.0 * math.pi * amin ** 3, E, nu)
+        how = "the Rayleigh-wave time πa_min√(ρ/G)/(0.1631ν + 0.8766)"
+    else:
+        kmax = max(max(law.kn, law.ks) for law in family.laws_by_pair.values())
+        dt_crit = 2.0 * math.sqrt(float(mass.min()) / kmax)
+        how = "2√(m_min/k_max)"
+    if scene.dt is None:
+        dt = scene.dt_fraction * dt_crit
+    else:
+        dt = float(scene.dt)
+        if dt > dt_crit and not scene.allow_supercritical:
+            raise SceneError(f"scene.dt={dt:.6g} exceeds the critical estimate {dt_crit:.6g} ({how}); give a "
+                             "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
+                             "allow_supercritical=True")
+    P = np.zeros((n, 16))
+    sp = Spheres3(pos=pos, vel=vel, angvel=w, quat=q.copy(), r=r, mass=mass, inertia=moments.mean(axis=1),
+                  inv_r2=1.0 / r ** 2, mat=mat, fixed=np.full(n, 2, np.int8), body=np.arange(n, dtype=np.int64),
+                  FM=np.zeros((n, 6)), P=P, ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
+    rot = np.zeros((n, 9))
+    rotations(q, rot)
+    ell = Ellipsoids3(axes=axes, amin=amin, rot=rot)
+    d = scene.damping
+    sim = SimulationEllipsoids(
+        ellipsoids=ell, scene=scene, spheres=sp, bodies=bodies, planes=planes, tris=tris, loading=loading, law=family,
+        law_params=params, box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity,
+        width=width + WARM_COLUMNS,
+        damping=Damping3(alpha=float(d.alpha), c_abs=float(d.C), c_rot_abs=float(d.C_rot),
+                         local=float(scene.local_damping), adaptive=False, alpha_now=np.zeros(1),
+                         prev_r=np.zeros((0, 3)), prev_dx=np.zeros((0, 3))))
+    _refuse_initial_overlaps(sim)
+    return sim
+
+
+def contact_pass(sim: SimulationEllipsoids, recording: bool = False):
+    """One ellipsoid pair pass at the current state (forces into ``sim.spheres.FM``, per-pair outputs
+    into ``sim.pairs``; the history advances as in a step): (status, elastic energy, iterations)."""
+    from .contacts.ellipsoids import ellipsoid_forces
+
+    rotations(sim.bodies.quat, sim.ell.rot)
+    return ellipsoid_forces(sim.spheres, sim.ell, sim.pairs, sim.planes, sim.tris, sim.law_params, sim.dt, recording,
+                            MAX_OVERLAP_RATIO)
+
+
+def _refuse_initial_overlaps(sim: SimulationEllipsoids) -> None:
+    """An overlap beyond the blow-up limit at step 0 is bad input, not a blow-up: name the pair."""
+    hist = sim.pairs.hist.copy()
+    status, _, _ = contact_pass(sim)
+    sim.pairs.hist[:] = hist
+    sim.spheres.FM[:] = 0.0
+    sim.planes.force[:] = 0.0
+    if status:
+        p = sim.pairs
+        n, nw = sim.n, sim.n_planes
+        amin = sim.ell.amin
+        rmin = np.where(p.j < n, np.minimum(amin[p.i], amin[np.minimum(p.j, n - 1)]), amin[p.i])
+        k = int(np.argmax(p.ovl / rmin))
+        j = int(p.j[k])
+        names = [pl.name for pl in sim.scene.planes] + [m.name for m in sim.scene.meshes]
+        other = (f"ellipsoid {j}" if j < n else f"wall {names[j - n]!r}" if j < n + nw
+                 else f"mesh {names[int(sim.tris.wall[j - n - nw])]!r} (triangle {j - n - nw})")
+        raise SceneError(f"ellipsoid {int(p.i[k])} overlaps {other} by {p.ovl[k]:.4g} at the start, more than "
+                         f"{MAX_OVERLAP_RATIO:.0%} of the smaller semi-axis ({rmin[k]:.4g}); move them apart")
