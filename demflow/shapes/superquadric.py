@@ -32,6 +32,9 @@ Assumptions (stated because the seed does not):
   of n > 2 the surface is flat (ρ = ∞, eq 39's denominator vanishes) and for n < 2 the curvature
   there is infinite.  eq 42 is evaluated in a rearranged form (see :func:`circles_overlap`) that
   does not lose the overlap to cancellation when ρ is large.
+- The centres C_i, C_j are taken in the order of the outward normals (n_i - n_j points from i to
+  j); where they have crossed (two sharp tips, n < 2, overlapping by more than ρ_i + ρ_j) the
+  circles are past each other and δ = ρ_i + ρ_j + d, n̂ = (C_i - C_j)/d (continuous at d = 0).
 - Overlaps are small against the particles (a few per cent), so ∂i ∩ j is one arc and f_j along ∂i
   has one minimum near the contact: the warm-started bracket is ±``window`` around the last α; a
   minimum found at the bracket's edge (or a pair seen for the first time) triggers a scan of
@@ -101,9 +104,10 @@ def bounding_radius(a: float, b: float, n: float) -> float:
     if n <= 2.0:
         return max(a, b)
     e = 2.0 / n - 1.0
-    t = (b * b / (a * a)) ** (1.0 / e)
-    u = t / (1.0 + t)
-    return math.sqrt(a * a * u ** (2.0 / n) + b * b * (1.0 - u) ** (2.0 / n))
+    L = 2.0 * math.log(b / a) / e  # log(u/(1-u)), taken in logs: 1/e is large for n near 2
+    u = 1.0 / (1.0 + math.exp(-L)) if L > 0.0 else math.exp(L) / (1.0 + math.exp(L))
+    r = math.sqrt(a * a * u ** (2.0 / n) + b * b * (1.0 - u) ** (2.0 / n))
+    return max(r, a, b)
 
 
 # ----------------------------------------------------------------------------- surface functions
@@ -364,7 +368,13 @@ def pair_contact(dx, dy, thi, thj, ai, bi, ni, rbi, aj, bj, nj, rbj, alpha_i, al
     cx = dx + Cjx - Cix
     cy = dy + Cjy - Ciy
     delta, d = circles_overlap(dx + Pjx - Pix, dy + Pjy - Piy, gnix, gniy, gnjx, gnjy, rhoi, rhoj, cx, cy)
-    if d > 0.0:
+    # the circles' centres in the order of the outward normals (n_i - n_j points from i to j); when they
+    # have crossed (sharp tips, ρ_i + ρ_j < δ) the circles are past each other: δ = ρ_i + ρ_j + d
+    if cx * (gnix - gnjx) + cy * (gniy - gnjy) < 0.0:
+        delta = rhoi + rhoj + d
+        ex = -cx / d
+        ey = -cy / d
+    elif d > 0.0:
         ex = cx / d
         ey = cy / d
     else:
@@ -422,12 +432,17 @@ def segment_contact(xi, yi, thi, ai, bi, ni, rbi, Ax, Ay, Bx, By, alpha_i, warm,
     cx = Ex - xi - Cx
     cy = Ey - yi - Cy
     d = math.sqrt(cx * cx + cy * cy)
+    gnx, gny = _to_global(ci, si, nx, ny)
+    sign = 1.0
+    if cx * gnx + cy * gny < 0.0:
+        sign = -1.0  # E is past the centre of curvature (a sharp tip): see pair_contact
     if d > 0.0:
-        ex = cx / d
-        ey = cy / d
+        ex = sign * cx / d
+        ey = sign * cy / d
     else:
-        ex, ey = _to_global(ci, si, nx, ny)
-    return rho - d, ex, ey, Cx + rho * ex, Cy + rho * ey, Ex, Ey, al, evals
+        ex = gnx
+        ey = gny
+    return rho - sign * d, ex, ey, Cx + rho * ex, Cy + rho * ey, Ex, Ey, al, evals
 
 
 def outline(a: float, b: float, n: float, theta: float = 0.0, count: int = 256) -> np.ndarray:
