@@ -239,25 +239,36 @@ TOLERANCES = {
         "(a failed warm start) is off by O(δ/r) ~ 1e-3.", absolute=True, kind="exact"),
     "superquadric.energy-dt": Tolerance(
         2e-2,
-        "Elastic frictionless superquadric gas (overlap law, no damping): the largest relative energy excursion at "
-        "dt and dt/2 agree within 2 % of each other (measured 0.6 % at dt_crit/80 vs /160): what remains is not "
-        "the time integration's but the circles-of-curvature model's (it is not the gradient of a potential: the "
-        "minimisers move the circles along their evolutes).", kind="self-consistency"),
-    "superquadric.energy-overlap-order": Tolerance(
-        1.0,
-        "The model's energy excursion is second order in the overlap: four times the stiffness (half the "
-        "overlaps) divides it by 4 (measured 3.8); 4 +- 1 separates second order from first (2) and third (8).",
-        absolute=True, kind="self-consistency"),
+        "Elastic frictionless superquadric gas (16 particles, overlap law, no damping, 0.5 s): the largest relative "
+        "energy excursion at dt = 2e-4 s and 1e-4 s agree within 2 % of each other (measured 0.34 %; a 25-particle "
+        "gas 0.6 %): what remains is not the time integration's but the circles-of-curvature model's (it is not "
+        "the gradient of a potential: the minimisers move the circles along their evolutes).",
+        kind="self-consistency"),
+    "superquadric.energy-model": Tolerance(
+        5e-3,
+        "The model's share of the elastic gas's energy excursion (superquadric.energy-dt), relative to the initial "
+        "energy: measured 5.0e-4 on the test's gas (overlaps ~1 % of b). It falls with the overlap (a 25-particle "
+        "gas: 2.06e-3, 5.5e-4, 1.4e-4 at kN = 1e5, 4e5, 1.6e6, i.e. ∝ 1/kN ∝ δ²; a chaotic gas does not give "
+        "that ratio reliably, so the order is not asserted). 5e-3 is 10x the measured value.", absolute=True,
+        kind="self-consistency"),
     "superquadric.energy-disc-order": Tolerance(
         1.0,
         "n = 2, a = b (discs): the contact is conservative and central differences are second order: the "
-        "energy excursion falls 4x when dt halves; 4 +- 1.", absolute=True, kind="self-consistency"),
+        "energy excursion falls 4x when dt halves (measured 4.21 from dt = 4e-4 to 2e-4 s); 4 +- 1 separates it "
+        "from first order (2).", absolute=True, kind="self-consistency"),
     "superquadric.symmetry": Tolerance(
         1e-9,
         "Relabelled or rotated scene vs the original after the run: positions [in units of the largest semi-axis] "
         "and orientations [rad]. Only round-off differs (the summation order, a rotated frame), amplified by the "
         "collisions of the run: measured <= 1e-12; 1e-9 fails any asymmetric term (O(overlap) ~ 1e-3).",
         absolute=True, kind="self-consistency"),
+    "superquadric.restitution": Tolerance(
+        5e-4,
+        "Head-on collision of two n = 4 superquadrics with Miyata's eq 17 dashpot vs the linear spring-dashpot "
+        "with the no-tension cut integrated by scipy to 1e-12 [rebound/approach speed]: measured 3.0e-5, 9.1e-5, "
+        "5.7e-5 (e = 0.9, 0.5, 0.01) at dt = t_contact/3000, halving with dt (first order: the contact starts "
+        "and ends between steps); 5e-4 leaves 5x and fails a dashpot off by 1 % (it moves the rebound by 9.5e-4 at e = 0.9, 4e-3 at e = 0.5).",
+        absolute=True, kind="exact"),
 }
 
 
