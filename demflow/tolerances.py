@@ -257,11 +257,14 @@ TOLERANCES = {
         "energy excursion falls 4x when dt halves (measured 4.21 from dt = 4e-4 to 2e-4 s); 4 +- 1 separates it "
         "from first order (2).", absolute=True, kind="self-consistency"),
     "superquadric.symmetry": Tolerance(
-        1e-9,
-        "Relabelled or rotated scene vs the original after the run: positions [in units of the largest semi-axis] "
-        "and orientations [rad]. Only round-off differs (the summation order, a rotated frame), amplified by the "
-        "collisions of the run: measured <= 1e-12; 1e-9 fails any asymmetric term (O(overlap) ~ 1e-3).",
-        absolute=True, kind="self-consistency"),
+        1e-7,
+        "Relabelled or rotated scene vs the original after the run (12 superquadrics falling in a box, friction, "
+        "eq 17 damping, 3000 steps): positions [in units of the largest semi-axis] and orientations [rad]. "
+        "Relabelling measured bit-identical; a rotated frame finds the minimisers again only to Brent's accuracy "
+        "(~√eps on α), and the heap's collisions amplify that: measured 2.1e-10 (positions) and 5.7e-10 rad "
+        "after the run. 1e-7 leaves 170x and stays far below any asymmetric term (O(δ/r) ~ 1e-3); the negative "
+        "control (a 1e-5 kick of one velocity [m/s]) ends beyond 10x the tolerance.", absolute=True,
+        kind="self-consistency"),
     "superquadric.restitution": Tolerance(
         5e-4,
         "Head-on collision of two n = 4 superquadrics with Miyata's eq 17 dashpot vs the linear spring-dashpot "
