@@ -95,7 +95,8 @@ def mass_properties(a: float, b: float, n: float, density: float) -> tuple[float
     return density * area(a, b, n), density * (ixx + iyy)
 
 
-def bounding_radius(a: float, b: float, n: float) -> float:
+@njit
+def bounding_radius(a, b, n):
     """Largest distance from the centroid to the surface [length], closed form.
 
     r² = a²u^(2/n) + b²(1-u)^(2/n) with u = cos²α (eq 35).  For n <= 2 it is convex in u, so the
