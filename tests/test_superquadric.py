@@ -449,3 +449,30 @@ def test_restitution_damping_gives_the_rebound_of_the_linear_dashpot(e):
     want = _rebound(zeta_linear(e))
     assert e <= want < 1
     assert abs(rebound - want) <= tol("superquadric.restitution").value
+
+
+# ----------------------------------------------------------------------------- walls: statics
+def test_settled_superquadric_loads_the_floor_with_its_weight_through_its_centroid():
+    """A tilted n = 4 superquadric dropped on a floor settles on a face: the floor's reaction is its weight
+    (ρ·area·g, Dirichlet's integral), the wall's moment about its point P is that of the reaction at the
+    contact point, and the body rests face down (θ a multiple of π) with the contact point under its
+    centroid.  The face is flat at its centre (κ = 0 for n > 2), so the support point moves as θ^(1/3): a
+    residual rocking of 2e-8 rad moves it by ~3e-4 m = 3e-3 a (measured); 1e-2 a is allowed."""
+    from demflow import GlobalDamping
+
+    a, b, n, rho, g = 0.1, 0.05, 4.0, 1650.0, 9.81
+    law = LinearLaw(kn=1e6, ks=5e5, friction=0.5)
+    sc = Scene(name="rest", discs=Superquadrics([0.3], [0.12], [a], [b], [n], "g", theta=[0.4], restitution=0.3),
+               materials={"g": Material(density=rho), "w": Material(density=0.0)}, laws={("g", "w"): law},
+               walls=[Wall("floor", (-0.2, 0.0), (1, 0), 0.0, 1.0, "w")], gravity=(0.0, -g), dt=2e-5,
+               damping=GlobalDamping(alpha=20.0))
+    sim = build(sc).run(100_000)
+    W = rho * sq.area(a, b, n) * g
+    F = sim.walls.force[0]
+    assert F[1] == pytest.approx(-W, rel=1e-6)
+    assert abs(F[0]) <= 1e-5 * W
+    cpx, cpy = sim.out.cpx[0], sim.out.cpy[0]
+    assert F[2] == pytest.approx((cpx + 0.2) * F[1] - cpy * F[0], rel=1e-9)
+    assert abs(cpx - sim.bodies.x[0]) <= 1e-2 * a
+    assert sim.bodies.y[0] == pytest.approx(b, rel=1e-2)  # resting on its long face (overlap W/kN = 3e-4)
+    assert abs(math.remainder(sim.bodies.th[0], math.pi)) < 1e-6
