@@ -258,11 +258,11 @@ TOLERANCES = {
         "from first order (2).", absolute=True, kind="self-consistency"),
     "superquadric.symmetry": Tolerance(
         1e-7,
-        "Relabelled or rotated scene vs the original after the run (12 superquadrics falling in a box, friction, "
-        "eq 17 damping, 3000 steps): positions [in units of the largest semi-axis] and orientations [rad]. "
-        "Relabelling measured bit-identical; a rotated frame finds the minimisers again only to Brent's accuracy "
-        "(~√eps on α), and the heap's collisions amplify that: measured 2.1e-10 (positions) and 5.7e-10 rad "
-        "after the run. 1e-7 leaves 170x and stays far below any asymmetric term (O(δ/r) ~ 1e-3); the negative "
+        "Relabelled, rotated or translated scene vs the original after the run (12 superquadrics falling in a "
+        "box, friction, eq 17 damping, 3000 steps): positions [in units of the largest semi-axis] and "
+        "orientations [rad]. Relabelling measured bit-identical; a rotated or shifted frame rounds differently "
+        "and finds the minimisers again only to Brent's accuracy (~√eps on α), and the heap's collisions amplify "
+        "that: measured <= 2.1e-10 (positions) and 7.6e-10 rad after the run. 1e-7 leaves 170x and stays far below any asymmetric term (O(δ/r) ~ 1e-3); the negative "
         "control (a 1e-5 kick of one velocity [m/s]) ends beyond 10x the tolerance.", absolute=True,
         kind="self-consistency"),
     "superquadric.restitution": Tolerance(

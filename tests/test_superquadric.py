@@ -356,7 +356,7 @@ def test_energy_of_an_elastic_disc_gas_converges_at_second_order():
 
 
 # ----------------------------------------------------------------------------- symmetry
-def _heap(order=None, rot=0.0, steps=3000, kick=0.0):
+def _heap(order=None, rot=0.0, steps=3000, kick=0.0, shift=(0.0, 0.0)):
     """12 superquadrics dropped in a box with friction, restitution damping (eq 17) and gravity; optionally
     relabelled (``order``: new index k holds old particle order[k]) or with the whole scene rotated by
     ``rot`` about the origin (positions, orientations, velocities, walls, gravity).  Returns the final
@@ -375,36 +375,41 @@ def _heap(order=None, rot=0.0, steps=3000, kick=0.0):
     c, s = math.cos(rot), math.sin(rot)
 
     def R(px, py):
+        return c * px - s * py + shift[0], s * px + c * py + shift[1]
+
+    def Rv(px, py):
         return c * px - s * py, s * px + c * py
     order = np.arange(N) if order is None else np.asarray(order)
     X, Y = R(x, y)
-    VX, VY = R(v[:, 0], v[:, 1])
+    VX, VY = Rv(v[:, 0], v[:, 1])
     L = 1.0
     corners = [(0, 0), (L, 0), (L, 1.5), (0, 1.5)]
     walls = []
     for k in range(4):
         (x0, y0), (x1, y1) = corners[k], corners[(k + 1) % 4]
         P = R(x0, y0)
-        e = R(x1 - x0, y1 - y0)
+        e = Rv(x1 - x0, y1 - y0)
         walls.append(Wall(f"w{k}", P, e, 0.0, 1.0, "w"))
     law = LinearLaw(kn=2e5, ks=1e5, friction=0.5)
     sc = Scene(name="heap", discs=Superquadrics(X[order], Y[order], a[order], b[order], n[order], "g",
                                                 theta=(th + rot)[order], velocity=np.column_stack([VX, VY])[order],
                                                 angular_velocity=om[order], restitution=0.3),
                materials={"g": Material(density=1000.0), "w": Material(density=0.0)},
-               laws={("g", "g"): law, ("g", "w"): law}, walls=walls, dt=1e-4, gravity=R(0.0, -9.81))
+               laws={("g", "g"): law, ("g", "w"): law}, walls=walls, dt=1e-4, gravity=Rv(0.0, -9.81))
     sim = build(sc).run(steps)
     bd = sim.bodies
     inv = np.argsort(order)
-    xb, yb = (c * bd.x + s * bd.y)[inv], (-s * bd.x + c * bd.y)[inv]
+    px, py = bd.x - shift[0], bd.y - shift[1]
+    xb, yb = (c * px + s * py)[inv], (-s * px + c * py)[inv]
     assert np.count_nonzero(sim.out.ovl > 0) > 0  # contacts at the end
     return xb, yb, (bd.th - rot)[inv], a.max()
 
 
-def test_symmetry_under_relabelling_and_rotation():
+def test_symmetry_under_relabelling_rotation_and_translation():
     x0, y0, t0, amax = _heap()
     t = tol("superquadric.symmetry").value
-    for kw in (dict(order=np.random.default_rng(1).permutation(12)), dict(rot=0.7), dict(rot=-2.3)):
+    for kw in (dict(order=np.random.default_rng(1).permutation(12)), dict(rot=0.7), dict(rot=-2.3),
+               dict(shift=(3.0, -1.25))):
         x1, y1, t1, _ = _heap(**kw)
         assert np.abs(x1 - x0).max() <= t * amax, kw
         assert np.abs(y1 - y0).max() <= t * amax, kw
