@@ -574,6 +574,9 @@ class Outputs:
 class Scene:
     """Everything that defines a 2D disc simulation.  Build it with :func:`demflow.build.build`.
 
+    discs : the particles: :class:`Discs`, or :class:`Superquadrics` (the 2D superquadric shape family,
+            run by :mod:`demflow.simulation_sq2d`)
+
     dt : the time step, or None for ``dt_fraction`` × 2√(m_min/k_max) (thesis §2.2.4.4)
     allow_supercritical : accept a dt above the critical estimate (refused otherwise)
     n_steps : default run length in steps (cycles)
@@ -583,7 +586,7 @@ class Scene:
     """
 
     name: str
-    discs: Discs
+    discs: Discs | Superquadrics
     materials: dict[str, Material]
     laws: dict[tuple[str, str], LinearLaw]
     walls: list[Wall] = field(default_factory=list)
