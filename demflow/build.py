@@ -12,7 +12,7 @@ import numpy as np
 from .contacts.neighbours import point_segment_distance
 from .integrate import critical_time_step
 from .laws import FAMILIES
-from .scene import Scene, SceneError, check_vector, is_number, type_phrase
+from .scene import Scene, SceneError, Superquadrics, check_vector, is_number, type_phrase
 from .space import open_box, periodic_box, wrap
 from .state import PeriodicBox
 from .validate import check_scene
@@ -305,22 +305,29 @@ def _tracked_pairs(scene: Scene, r):
     return track
 
 
-def build(scene: Scene):
-    """Check ``scene`` and return a ready :class:`~demflow.simulation.Simulation` (a 3D
-    :class:`~demflow.scene3d.Scene3D`: a :class:`~demflow.simulation3d.Simulation3D`)."""
-    from .scene3d import Scene3D
-    from .simulation import Simulation, check_run_length
+def material_laws(scene, mats: list):
+    """The laws of every material pair that can meet (particle materials ``mats``, one per particle, and
+    the walls'), and the one law family that implements them.  Returns (material names sorted, their
+    index, {pair: law}, the law family instance, the largest stiffness bound)."""
+    mat_names = sorted(scene.materials)
+    mid = {m: k for k, m in enumerate(mat_names)}
+    disc_mats = sorted(set(mats))
+    wall_mats = sorted({w.material for w in scene.walls})
+    count = {m: mats.count(m) for m in disc_mats}
+    needed = [(a, b) for ia, a in enumerate(disc_mats) for b in disc_mats[ia:]
+              if (a != b or count[a] >= 2)]
+    needed += [(a, b) for a in disc_mats for b in wall_mats]
+    used = {(a, b): scene.law_for(a, b) for a, b in needed}  # each checked by its key (demflow.validate)
+    family = _law_family(used)
+    law = family(scene, used, mid)
+    k_max = max([law.stiffness_bound(lw) for lw in used.values()], default=0.0)
+    return mat_names, mid, used, law, k_max
 
-    if isinstance(scene, Scene3D):
-        from .build3d import build3d
 
-        return build3d(scene)
-
-    check_scene(scene)  # every field on its own and the references between objects (demflow.validate)
-    x, y, r, mats, mass, inertia, v, om = _check_discs(scene)
-    n = x.shape[0]
-
-    # walls (fields checked by Wall.check): geometry, with every endpoint within MAX_LENGTH
+def wall_geometry(scene) -> list:
+    """Per wall of ``scene.walls`` (fields checked by Wall.check): (ax, ay, bx, by, px, py, ex, ey), the
+    endpoints A = P + h1·e, B = P + h2·e, the point P and the unit direction e, with every endpoint
+    within MAX_LENGTH."""
     wall_geo = []
     for i, w in enumerate(scene.walls):
         ex, ey = map(float, w.direction)
@@ -335,20 +342,31 @@ def build(scene: Scene):
                              f"endpoint beyond ±{MAX_LENGTH:g}, where squared distances overflow; give a wall "
                              "within that range (or rescale the length unit)")
         wall_geo.append(geo)
+    return wall_geo
 
-    # laws for every material pair that can meet, and the one law family that implements them
-    mat_names = sorted(scene.materials)
-    mid = {m: k for k, m in enumerate(mat_names)}
-    disc_mats = sorted(set(mats))
-    wall_mats = sorted({w.material for w in scene.walls})
-    count = {m: mats.count(m) for m in disc_mats}
-    needed = [(a, b) for ia, a in enumerate(disc_mats) for b in disc_mats[ia:]
-              if (a != b or count[a] >= 2)]
-    needed += [(a, b) for a in disc_mats for b in wall_mats]
-    used = {(a, b): scene.law_for(a, b) for a, b in needed}  # each checked by its key (demflow.validate)
-    family = _law_family(used)
-    law = family(scene, used, mid)
-    k_max = max([law.stiffness_bound(lw) for lw in used.values()], default=0.0)
+
+def build(scene: Scene):
+    """Check ``scene`` and return a ready :class:`~demflow.simulation.Simulation` (a 3D
+    :class:`~demflow.scene3d.Scene3D`: a :class:`~demflow.simulation3d.Simulation3D`)."""
+    from .scene3d import Scene3D
+    from .simulation import Simulation, check_run_length
+
+    if isinstance(scene, Scene3D):
+        from .build3d import build3d
+
+        return build3d(scene)
+
+    check_scene(scene)  # every field on its own and the references between objects (demflow.validate)
+    if isinstance(scene.discs, Superquadrics):
+        from .simulation_sq2d import build_superquadrics
+
+        return build_superquadrics(scene)
+    x, y, r, mats, mass, inertia, v, om = _check_discs(scene)
+    n = x.shape[0]
+
+    wall_geo = wall_geometry(scene)
+
+    mat_names, mid, used, law, k_max = material_laws(scene, mats)
 
     # time step
     dt_crit = critical_time_step(mass, k_max)

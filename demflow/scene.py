@@ -486,6 +486,65 @@ class Discs:
         return len(np.atleast_1d(self.x))
 
 
+# Superquadric exponent range (Miyata §2.3: "1 < n <= 10", smooth convex shapes)
+SUPERQUADRIC_N_MIN = 1.0  # exclusive
+SUPERQUADRIC_N_MAX = 10.0
+
+
+@dataclass
+class Superquadrics:
+    """2D superquadric particles |x/a|^n + |y/b|^n <= 1 in their body frame (Miyata eq 34), the
+    shape family that :func:`demflow.build.build` runs on :mod:`demflow.simulation_sq2d` when
+    ``scene.discs`` is one of these.
+
+    x, y : centroids [length]; a, b : semi-axes along the body's x and y [length] (> 0);
+    n : exponent, 1 < n <= 10 (n = 2, a = b: a disc of radius a); theta : orientation of the body's
+    x axis [rad] (default 0); material : one name or one per particle; mass : optional, overriding
+    ρ·area (the moment of inertia is scaled with it); velocity (n, 2) at -Δt/2 [length/time];
+    angular_velocity [rad/time].
+    restitution : e in (0, 1], Miyata eq 17: every contact (walls too, m* = m there) gets the normal
+                  dashpot c_n = 2 ln(1/e) √(k_n m*/(π² + ln²(1/e))) on top of the law's cn; None: none.
+    tolerance : Brent's tolerance on the surface parameter α [rad] (a speed-accuracy knob).
+    window : half-width of the warm-start bracket around the last step's α [rad].
+    """
+
+    x: Sequence[float]
+    y: Sequence[float]
+    a: Sequence[float]
+    b: Sequence[float]
+    n: Sequence[float]
+    material: Sequence[str] | str
+    theta: Sequence[float] | None = None
+    mass: Sequence[float] | None = None
+    velocity: Sequence[Sequence[float]] | None = None
+    angular_velocity: Sequence[float] | None = None
+    restitution: float | None = None
+    tolerance: float = 1e-9
+    window: float = math.pi / 8
+
+    def __len__(self) -> int:
+        return len(np.atleast_1d(self.x))
+
+    def check(self, path: str) -> None:
+        """The per-particle shape fields and the knobs, each entry by its path (``scene.discs.n[3]``).
+        The arrays (lengths, materials, masses, velocities) are checked by the build."""
+        count = len(self)
+        for key, rule, unit in (("a", dict(gt=0.0), "length"), ("b", dict(gt=0.0), "length"),
+                                ("n", dict(gt=SUPERQUADRIC_N_MIN, le=SUPERQUADRIC_N_MAX),
+                                 "Miyata §2.3: smooth convex superquadrics, 1 < n <= 10")):
+            v = getattr(self, key)
+            items = check_items(f"{path}.{key}", v, kinds=(tuple, list, np.ndarray))
+            if len(items) != count:
+                raise SceneError(f"{path}.{key} has {len(items)} entries for {count} particles (len({path}.x)); "
+                                 "give one per particle")
+            for k, e in enumerate(items):
+                check_number(f"{path}.{key}[{k}]", e, unit=unit, **rule)
+        if self.restitution is not None:
+            check_number(f"{path}.restitution", self.restitution, gt=0.0, le=1.0, unit="Miyata eq 17")
+        check_number(f"{path}.tolerance", self.tolerance, gt=0.0, lt=1.0, unit="rad")
+        check_number(f"{path}.window", self.window, gt=0.0, le=math.pi, unit="rad")
+
+
 @dataclass(frozen=True)
 class Outputs:
     """What the run records.
@@ -515,6 +574,9 @@ class Outputs:
 class Scene:
     """Everything that defines a 2D disc simulation.  Build it with :func:`demflow.build.build`.
 
+    discs : the particles: :class:`Discs`, or :class:`Superquadrics` (the 2D superquadric shape family,
+            run by :mod:`demflow.simulation_sq2d`)
+
     dt : the time step, or None for ``dt_fraction`` × 2√(m_min/k_max) (thesis §2.2.4.4)
     allow_supercritical : accept a dt above the critical estimate (refused otherwise)
     n_steps : default run length in steps (cycles)
@@ -524,7 +586,7 @@ class Scene:
     """
 
     name: str
-    discs: Discs
+    discs: Discs | Superquadrics
     materials: dict[str, Material]
     laws: dict[tuple[str, str], LinearLaw]
     walls: list[Wall] = field(default_factory=list)

@@ -115,6 +115,47 @@ def first_nonfinite(arrays: dict) -> str | None:
     return None
 
 
+def walls_and_loading(scene, wall_geo, wall_mat):
+    """The :class:`~demflow.state.Walls` and :class:`~demflow.state.Loading` of ``scene.walls``
+    (``wall_geo``: per wall (ax, ay, bx, by, px, py, ex, ey) from :func:`demflow.build.wall_geometry`,
+    ``wall_mat``: material indices)."""
+    nw = len(wall_geo)
+    g = np.array(wall_geo, dtype=np.float64).reshape(nw, 8)
+    px, py = g[:, 4].copy(), g[:, 5].copy()
+    walls = Walls(px=px, py=py, ex=g[:, 6].copy(), ey=g[:, 7].copy(),
+                  h1=np.array([w.h1 for w in scene.walls], dtype=np.float64),
+                  h2=np.array([w.h2 for w in scene.walls], dtype=np.float64),
+                  vx=np.zeros(nw), vy=np.zeros(nw), om=np.zeros(nw), cx=px.copy(), cy=py.copy(),
+                  mat=wall_mat, force=np.zeros((nw, 3)))
+    K = max([len(w.phases) for w in scene.walls], default=0) or 1
+    ld = Loading(phase_start=np.zeros((nw, K), np.int64), phase_end=np.zeros((nw, K), np.int64),
+                 phase_vx=np.zeros((nw, K)), phase_vy=np.zeros((nw, K)), phase_om=np.zeros((nw, K)),
+                 phase_cx=np.zeros((nw, K)), phase_cy=np.zeros((nw, K)),
+                 phase_about_p=np.ones((nw, K), np.int8), servo_on=np.zeros(nw, np.int8),
+                 servo_start=np.zeros(nw, np.int64), servo_F=np.zeros(nw), servo_dx=np.zeros(nw),
+                 servo_dy=np.zeros(nw), servo_G=np.zeros(nw), servo_vmax=np.zeros(nw))
+    for w, wall in enumerate(scene.walls):
+        s0 = 0
+        for k, ph in enumerate(wall.phases):
+            ld.phase_start[w, k] = s0
+            ld.phase_end[w, k] = s0 + int(ph.cycles)
+            s0 += int(ph.cycles)
+            ld.phase_vx[w, k], ld.phase_vy[w, k] = map(float, ph.velocity)
+            ld.phase_om[w, k] = float(ph.omega)
+            if ph.pivot is not None:
+                ld.phase_about_p[w, k] = 0
+                ld.phase_cx[w, k], ld.phase_cy[w, k] = map(float, ph.pivot)
+        if wall.servo is not None:
+            s = wall.servo
+            L = float(np.hypot(*s.direction))
+            ld.servo_on[w] = 1
+            ld.servo_start[w] = s.start
+            ld.servo_F[w] = s.force
+            ld.servo_dx[w], ld.servo_dy[w] = s.direction[0] / L, s.direction[1] / L
+            ld.servo_G[w], ld.servo_vmax[w] = s.gain, s.v_max
+    return walls, ld
+
+
 def _disc_alias(field):
     return property(lambda self: getattr(self.discs, field), doc=f"discs.{field} (disc order)")
 
@@ -203,43 +244,9 @@ class Simulation:
         self.rebuild()
 
     def _walls_init(self, scene, wall_geo, wall_mat):
-        nw = len(wall_geo)
-        self.nw = nw
-        g = np.array(wall_geo, dtype=np.float64).reshape(nw, 8)
-        px, py = g[:, 4].copy(), g[:, 5].copy()
-        self.walls = Walls(px=px, py=py, ex=g[:, 6].copy(), ey=g[:, 7].copy(),
-                           h1=np.array([w.h1 for w in scene.walls], dtype=np.float64),
-                           h2=np.array([w.h2 for w in scene.walls], dtype=np.float64),
-                           vx=np.zeros(nw), vy=np.zeros(nw), om=np.zeros(nw), cx=px.copy(), cy=py.copy(),
-                           mat=wall_mat, force=np.zeros((nw, 3)))
+        self.nw = len(wall_geo)
+        self.walls, self.loading = walls_and_loading(scene, wall_geo, wall_mat)
         self.wall_names = [w.name for w in scene.walls]
-        K = max([len(w.phases) for w in scene.walls], default=0) or 1
-        ld = Loading(phase_start=np.zeros((nw, K), np.int64), phase_end=np.zeros((nw, K), np.int64),
-                     phase_vx=np.zeros((nw, K)), phase_vy=np.zeros((nw, K)), phase_om=np.zeros((nw, K)),
-                     phase_cx=np.zeros((nw, K)), phase_cy=np.zeros((nw, K)),
-                     phase_about_p=np.ones((nw, K), np.int8), servo_on=np.zeros(nw, np.int8),
-                     servo_start=np.zeros(nw, np.int64), servo_F=np.zeros(nw), servo_dx=np.zeros(nw),
-                     servo_dy=np.zeros(nw), servo_G=np.zeros(nw), servo_vmax=np.zeros(nw))
-        for w, wall in enumerate(scene.walls):
-            s0 = 0
-            for k, ph in enumerate(wall.phases):
-                ld.phase_start[w, k] = s0
-                ld.phase_end[w, k] = s0 + int(ph.cycles)
-                s0 += int(ph.cycles)
-                ld.phase_vx[w, k], ld.phase_vy[w, k] = map(float, ph.velocity)
-                ld.phase_om[w, k] = float(ph.omega)
-                if ph.pivot is not None:
-                    ld.phase_about_p[w, k] = 0
-                    ld.phase_cx[w, k], ld.phase_cy[w, k] = map(float, ph.pivot)
-            if wall.servo is not None:
-                s = wall.servo
-                L = float(np.hypot(*s.direction))
-                ld.servo_on[w] = 1
-                ld.servo_start[w] = s.start
-                ld.servo_F[w] = s.force
-                ld.servo_dx[w], ld.servo_dy[w] = s.direction[0] / L, s.direction[1] / L
-                ld.servo_G[w], ld.servo_vmax[w] = s.gain, s.v_max
-        self.loading = ld
 
     # the linear law's parameters by their historical names
     @property

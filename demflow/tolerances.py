@@ -246,6 +246,84 @@ TOLERANCES = {
         "9.1e-4, 2.9e-4, 5.4e-5 at kn = 2e6, 2e7, 2e8 (peak overlaps 5.5, 1.8, 0.55 mm): the Lin & Ng contact "
         "force is the gradient of its overlap only to O(δ/R), so energy is conserved in the rigid limit. 2e-3 is "
         "2.2x the kn = 2e6 value.", kind="self-consistency"),
+    "superquadric.disc-limit": Tolerance(
+        1e-12,
+        "Acceptance of issue 15: a superquadric with n = 2, a = b equals a disc to 1e-12 relative in forces (the "
+        "largest |force-sum difference| over the largest force of a dense packing). The circles of curvature of a "
+        "circle are the disc itself whatever the minimiser, so only round-off separates the two codes: measured "
+        "3.1e-14 (overlap law) and 1.6e-15 (incremental law) after 20 steps.", kind="exact"),
+    "superquadric.mass": Tolerance(
+        1e-8,
+        "Area and polar moment from Dirichlet's integral vs the shoelace and second-moment sums of a 200 000-vertex "
+        "polygon inscribed in the shape (its own error O(N^-2) ~ 1e-9: measured <= 9.6e-10).", kind="exact"),
+    "superquadric.polygon-overlap": Tolerance(
+        2e-2,
+        "Circles-of-curvature overlap (eq 42) vs the penetration depth of two 4000-vertex polygons (separating "
+        "axes), random shapes 2 <= n <= 10, orientations, overlaps 0.1-2 % of the smallest semi-axis: measured "
+        "<= 6.6e-3 relative (240 random pairs, half of them two equal shapes, a third aligned); 2e-2 leaves 3x. "
+        "The model error grows as n falls below 2 (1.0e-2 at n = 1.7, 1.5e-2 at 1.5): superquadric.polygon-"
+        "overlap-sharp.", kind="exact"),
+    "superquadric.polygon-normal": Tolerance(
+        2e-2,
+        "Angle [rad] between the contact normal C_i -> C_j (eq 42) and the polygons' minimum-translation "
+        "direction, same pairs (n >= 2): measured <= 5.0e-3 rad, plus the reference's own resolution (the "
+        "turn between adjacent edge normals near the contact).", absolute=True, kind="exact"),
+    "superquadric.polygon-overlap-sharp": Tolerance(
+        0.25,
+        "As superquadric.polygon-overlap with some n in [1.2, 2): the tips become nearly corners (curvature radius "
+        "-> 0 on the axes) and the faces nearly straight; eq 42 measures the overlap along the line of the circles' "
+        "centres while the minimum translation may be oblique: measured <= 0.106 relative at n = 1.2, 0.090 at "
+        "1.3, 0.015 at 1.5 (60 pairs each, half of them two equal shapes); the normals then differ by up to "
+        "0.38 rad, so only the overlap is compared. Below n = 1.2 (near-rhombi) the model degrades further (0.12 "
+        "at 1.14; up to 12x the overlap below 1.1, face-to-face): not tested, a limitation of the method.",
+        kind="exact"),
+    "superquadric.potential-minimum": Tolerance(
+        1e-9,
+        "The Brent minimum of the geometric potential f_j along ∂i (eqs 36-37) is not above the brute-force "
+        "minimum over 4000 polygon vertices lying on ∂i (an upper bound of the true minimum) by more than this "
+        "[dimensionless f]: Brent's tolerance 1e-9 on α changes f by O(f''·1e-18); a wrong local minimum "
+        "(a failed warm start) is off by O(δ/r) ~ 1e-3.", absolute=True, kind="exact"),
+    "superquadric.energy-dt": Tolerance(
+        2e-2,
+        "Elastic frictionless superquadric gas (16 particles, overlap law, no damping, 0.5 s): the largest relative "
+        "energy excursion at dt = 2e-4 s and 1e-4 s agree within 2 % of each other (measured 0.34 %; a 25-particle "
+        "gas 0.6 %): what remains is not the time integration's but the circles-of-curvature model's (it is not "
+        "the gradient of a potential: the minimisers move the circles along their evolutes).",
+        kind="self-consistency"),
+    "superquadric.energy-model": Tolerance(
+        5e-3,
+        "The model's share of the elastic gas's energy excursion (superquadric.energy-dt), relative to the initial "
+        "energy: measured 5.0e-4 on the test's gas (overlaps ~1 % of b). It falls with the overlap (a 25-particle "
+        "gas: 2.06e-3, 5.5e-4, 1.4e-4 at kN = 1e5, 4e5, 1.6e6, i.e. ∝ 1/kN ∝ δ²; a chaotic gas does not give "
+        "that ratio reliably, so the order is not asserted). 5e-3 is 10x the measured value.", absolute=True,
+        kind="self-consistency"),
+    "superquadric.energy-disc-order": Tolerance(
+        1.0,
+        "n = 2, a = b (discs): the contact is conservative and central differences are second order: the "
+        "energy excursion falls 4x when dt halves (measured 4.21 from dt = 4e-4 to 2e-4 s); 4 +- 1 separates it "
+        "from first order (2).", absolute=True, kind="self-consistency"),
+    "superquadric.symmetry": Tolerance(
+        1e-7,
+        "Relabelled, rotated or translated scene vs the original after the run (12 superquadrics falling in a "
+        "box, friction, eq 17 damping, 3000 steps): positions [in units of the largest semi-axis] and "
+        "orientations [rad]. Relabelling measured bit-identical; a rotated or shifted frame rounds differently "
+        "and finds the minimisers again only to Brent's accuracy (~√eps on α), and the heap's collisions amplify "
+        "that: measured <= 2.1e-10 (positions) and 7.6e-10 rad after the run. 1e-7 leaves 170x and stays far below any asymmetric term (O(δ/r) ~ 1e-3); the negative "
+        "control (a 1e-5 kick of one velocity [m/s]) ends beyond 10x the tolerance.", absolute=True,
+        kind="self-consistency"),
+    "superquadric.restitution": Tolerance(
+        5e-4,
+        "Head-on collision of two n = 4 superquadrics with Miyata's eq 17 dashpot vs the linear spring-dashpot "
+        "with the no-tension cut integrated by scipy to 1e-12 [rebound/approach speed]: measured 3.0e-5, 9.1e-5, "
+        "5.7e-5 (e = 0.9, 0.5, 0.01) at dt = t_contact/3000, halving with dt (first order: the contact starts "
+        "and ends between steps); 5e-4 leaves 5x and fails a dashpot off by 1 % (it moves the rebound by 9.5e-4 at e = 0.9, 4e-3 at e = 0.5).",
+        absolute=True, kind="exact"),
+    "superquadric.moving-wall": Tolerance(
+        1e-6,
+        "A moving frictionless wall (line contact, overlap law, undamped) bounces a superquadric elastically in "
+        "the wall's frame: measured energy error 5.6e-8 (dt = 1e-5 s, contact time 0.043 s) and 1.9e-8 at dt/2; "
+        "rebound 2V to 5.3e-8 face-on. 1e-6 leaves 18x; a wall velocity left out of the relative velocity gives "
+        "a rebound V (error 0.5), a wrong lever arm an O(1) energy error.", absolute=True, kind="exact"),
 }
 
 

@@ -16,8 +16,9 @@ Each scene object checks its own fields (``Wall.check``, ``Servo.check``, ``Line
 from __future__ import annotations
 
 from .laws import FAMILIES
-from .scene import (Box, ContactModel, Discs, GlobalDamping, Material, Outputs, Scene, SceneError, Wall, check_flag,
-                    check_items, check_name, check_number, check_type, check_vector, check_whole, type_phrase)
+from .scene import (Box, ContactModel, Discs, GlobalDamping, Material, Outputs, Scene, SceneError, Superquadrics, Wall,
+                    check_flag, check_items, check_name, check_number, check_type, check_vector, check_whole,
+                    type_phrase)
 
 
 def check_scene(scene) -> None:
@@ -25,8 +26,10 @@ def check_scene(scene) -> None:
     check_type("scene", scene, Scene)
     check_name("scene.name", scene.name)
     check_type("scene.description", scene.description, str)
-    check_type("scene.discs", scene.discs, Discs)
+    check_type("scene.discs", scene.discs, (Discs, Superquadrics))
     materials = _check_materials(scene)
+    if isinstance(scene.discs, Superquadrics):
+        scene.discs.check("scene.discs")
     _check_laws(scene, materials)
     check_type("scene.contact_model", scene.contact_model, ContactModel)
     scene.contact_model.check("scene.contact_model")
