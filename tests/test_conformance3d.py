@@ -23,7 +23,7 @@ import pytest
 
 import reference_contact as rc
 from helpers import json_leaves
-from demflow import GlobalDamping, LinearLaw, PlateServo, SceneError, build
+from demflow import Ellipsoids, GlobalDamping, LinearLaw, PlateServo, SceneError, build
 from demflow.cases.conformance_3d import (CASE, CONFORMANCE, LIFT_STEP, PARAMS, VARIANTS, conformance_tolerance,
                                          engine_for, scene)
 from demflow.engines import EngineUnsupported, get_engine3d, reference
@@ -342,6 +342,9 @@ USING_3D = {  # feature key -> an oblique-plane scene (incremental for YADE, tot
     "local-damping-3d": lambda sc: dataclasses.replace(sc, local_damping=0.2),
     "servo-plates": _servo,
     "fixed-spheres": lambda sc: dataclasses.replace(sc, spheres=dataclasses.replace(sc.spheres, fixed=[True])),
+    "ellipsoids-3d": lambda sc: dataclasses.replace(sc, spheres=None, ellipsoids=Ellipsoids(
+        axes=[[r, 0.8 * r, 0.6 * r] for r in sc.spheres.radius], x=sc.spheres.x, y=sc.spheres.y, z=sc.spheres.z,
+        material=sc.spheres.material)),
 }
 REFUSED_3D = [(f.key, e) for f in FEATURES_3D for e in ENGINE_NAMES
               if f.expression(e).verdict in (CANNOT, MATCHING) and (f.expression(e).uses or f.uses)]

@@ -4,6 +4,7 @@ runs are written byte for byte as stored (no engine needed)."""
 import dataclasses
 import html
 
+import numpy as np
 import pytest
 
 from demflow import ContactModel, GlobalDamping, Servo, build
@@ -39,6 +40,14 @@ def _servo(sc):
     return sc
 
 
+def _superquadrics(d):
+    from demflow import Superquadrics
+
+    n = len(d.x)
+    r = np.broadcast_to(np.asarray(d.radius, dtype=float), (n,))
+    return Superquadrics(x=d.x, y=d.y, a=r, b=r, n=np.full(n, 4.0), material=d.material)
+
+
 USING = {  # feature key -> a nine-disc scene that uses it (starting from the engine-matching undamped scene)
     "normal-spring": lambda sc: dataclasses.replace(sc, contact_model=ContactModel(normal="incremental")),
     "sliding-rule": lambda sc: dataclasses.replace(sc, contact_model=ContactModel(normal="overlap",
@@ -48,6 +57,7 @@ USING = {  # feature key -> a nine-disc scene that uses it (starting from the en
     "global-damping": lambda sc: dataclasses.replace(sc, damping=GlobalDamping(alpha=1.0)),
     "servo-walls": _servo,
     "pore-fluid": lambda sc: dataclasses.replace(sc, fluid=Fluid(viscosity=1.0)),
+    "superquadrics-2d": lambda sc: dataclasses.replace(sc, discs=_superquadrics(sc.discs)),
 }
 REFUSED = [(f.key, e) for f in FEATURES for e in ENGINES if f.uses and f.expression(e).verdict in (CANNOT, MATCHING)]
 

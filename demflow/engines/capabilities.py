@@ -89,6 +89,12 @@ def _fluid(scene) -> bool:
     return scene.fluid is not None
 
 
+def _superquadrics(scene) -> bool:
+    from ..scene import Superquadrics
+
+    return isinstance(scene.discs, Superquadrics)
+
+
 FEATURES: tuple[Feature, ...] = (
     Feature("discs-2d", "2D discs", "discs, m = ρπR², I = ½mR²",
             yade=Expression("spheres, blockedDOFs 'zXY', mass and inertia set per body to the disc values", EXACT),
@@ -163,6 +169,12 @@ FEATURES: tuple[Feature, ...] = (
             yade=Expression("no coupled Stokes BEM in the deck", CANNOT),
             liggghts=Expression("no coupled Stokes BEM in the deck", CANNOT), uses=_fluid,
             remedy="run the dry scene (Scene.fluid = None) in the engine and the saturated one in demflow"),
+    Feature("superquadrics-2d", "2D superquadrics", "|x/a|^n + |y/b|^n = 1 particles, Brent potential contact "
+            "with circles of curvature (Miyata eqs 34-42; demflow.shapes.superquadric)",
+            yade=Expression("no 2D superquadric shape", CANNOT),
+            liggghts=Expression("superquadrics are 3D and compiled out of the Debian build", CANNOT),
+            uses=_superquadrics,
+            remedy="compare the circle cases (n = 2, a = b: discs) with the engines; superquadrics run in demflow only"),
 )
 
 
@@ -280,7 +292,17 @@ MEASURED_3D = {
 }
 _M = MEASURED_3D
 
+def _ellipsoids(scene) -> bool:
+    return getattr(scene, "ellipsoids", None) is not None
+
+
 FEATURES_3D: tuple[Feature, ...] = (
+    Feature("ellipsoids-3d", "3D ellipsoids", "Ellipsoids: Lin & Ng geometric-potential contact, R_e from the "
+            "principal curvatures (Miyata eqs 43-59; demflow.shapes.ellipsoid)",
+            yade=Expression("no ellipsoid shape in the deck (YADE's are polyhedra or clumps)", CANNOT),
+            liggghts=Expression("no ellipsoid pair style in LIGGGHTS-PUBLIC 3.8 (superquadrics compiled out)",
+                                CANNOT),
+            uses=_ellipsoids, remedy="run ellipsoid-like clumps (Clumps) in the engines and the ellipsoids in demflow"),
     Feature("law-3d", "Hertz-Mindlin law (3D)", "HertzMindlinLaw: F = 4/3 E*√R* δ^{3/2}, k_t = 8G*√(R*δ)",
             yade=Expression("FrictMat + Ip2_FrictMat_FrictMat_MindlinPhys(betan, betas, frictAngle) + "
                             "Law2_ScGeom_MindlinPhys_Mindlin; kno = 4/3 E*√R*, kso = 8G*√R* (2023.02a: series G*, "
