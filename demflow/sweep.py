@@ -65,19 +65,25 @@ def parameter_grid(sets: dict) -> list[dict]:
     return [dict(zip(keys, combo)) for combo in itertools.product(*(sets[k] for k in keys))]
 
 
-def run_case_checks(job: tuple) -> list[dict]:
-    """One run of a registered case: (case name, parameter overrides) → a row per check (value,
-    reference, error, passed, kind) with the overrides and the wall time. Top level: picklable."""
+def timed_case_run(name: str, overrides: dict):
+    """Run registered case ``name`` with ``overrides``: (case, parameters, CaseRun, checks, wall seconds)."""
     from .cases import get_case
 
-    name, overrides = job
     case = get_case(name)
     p = case.merged(overrides)
     t0 = time.perf_counter()
     run = case.run(p)
     wall = time.perf_counter() - t0
+    return case, p, run, case.checks(run, p), wall
+
+
+def run_case_checks(job: tuple) -> list[dict]:
+    """One run of a registered case: (case name, parameter overrides) → a row per check (value,
+    reference, error, passed, kind) with the overrides and the wall time. Top level: picklable."""
+    name, overrides = job
+    _, _, _, checks, wall = timed_case_run(name, overrides)
     return [dict(**overrides, check=c.name, kind=c.kind, value=c.value, reference=c.reference, error=c.error,
-                 passed=c.passed, wall_s=wall) for c in case.checks(run, p)]
+                 passed=c.passed, wall_s=wall) for c in checks]
 
 
 def case_sweep(name: str, sets: dict, *, scheduler=None, workers=None, progress: bool | None = None) -> pd.DataFrame:
@@ -88,4 +94,4 @@ def case_sweep(name: str, sets: dict, *, scheduler=None, workers=None, progress:
     return pd.DataFrame([r for run in rows for r in run])
 
 
-__all__ = ["run_sweep", "parameter_grid", "run_case_checks", "case_sweep"]
+__all__ = ["run_sweep", "parameter_grid", "timed_case_run", "run_case_checks", "case_sweep"]

@@ -25,7 +25,6 @@ the kernels first, so that no timed run pays for compilation.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pandas as pd
@@ -46,16 +45,11 @@ def _cost(run) -> dict:
 def run_observed(job) -> dict:
     """One run of a study: (case name, overrides) → its observables (check name → value) and cost.
     Top level: picklable for a Dask worker."""
-    from .cases import get_case
     from .cases.base import counted
+    from .sweep import timed_case_run
 
-    name, overrides = job
-    case = get_case(name)
-    p = case.merged(overrides)
-    t0 = time.perf_counter()
-    run = case.run(p)
-    wall = time.perf_counter() - t0
-    obs = {c.name: float(c.value) for c in counted(case.checks(run, p)) if math.isfinite(c.value)}
+    _, _, run, checks, wall = timed_case_run(*job)
+    obs = {c.name: float(c.value) for c in counted(checks) if math.isfinite(c.value)}
     return dict(observables=obs, wall_s=wall, **_cost(run))
 
 

@@ -148,15 +148,20 @@ def _json_value(data: bytes, rng: random.Random) -> bytes:
     return json.dumps(obj).encode()
 
 
-def corrupted_dir(engine: str, dest: Path, rng: random.Random) -> tuple[str, str]:
-    """Copy the engine's fixture outputs into ``dest`` with one file corrupted; returns (file, kind)."""
+def corrupted_copy(src: Path, names, dest: Path, rng: random.Random) -> tuple[str, str]:
+    """Copy the files ``names`` of ``src`` into ``dest`` with one of them corrupted; returns (file, kind)."""
     dest.mkdir(parents=True, exist_ok=True)
-    for name in FILES[engine]:
-        shutil.copyfile(FIXTURES / engine / name, dest / name)
-    name = rng.choice(FILES[engine])
-    kind, data = corrupt((FIXTURES / engine / name).read_bytes(), rng, is_json=name.endswith(".json"))
+    for name in names:
+        shutil.copyfile(src / name, dest / name)
+    name = rng.choice(names)
+    kind, data = corrupt((src / name).read_bytes(), rng, is_json=name.endswith(".json"))
     (dest / name).write_bytes(data)
     return name, kind
+
+
+def corrupted_dir(engine: str, dest: Path, rng: random.Random) -> tuple[str, str]:
+    """Copy the engine's fixture outputs into ``dest`` with one file corrupted; returns (file, kind)."""
+    return corrupted_copy(FIXTURES / engine, FILES[engine], dest, rng)
 
 
 def fingerprint(root: Path) -> str:

@@ -42,15 +42,9 @@ def read(engine: str, sim, outdir: Path):
 
 def corrupted_dir(engine: str, dest: Path, rng) -> tuple[str, str]:
     """Copy the fixture outputs into ``dest`` with one file corrupted; returns (file, kind)."""
-    from reader_faults import corrupt
+    from reader_faults import corrupted_copy
 
-    dest.mkdir(parents=True, exist_ok=True)
-    for name in FILES[engine]:
-        shutil.copyfile(FIXTURES / engine / name, dest / name)
-    name = rng.choice(FILES[engine])
-    kind, data = corrupt((FIXTURES / engine / name).read_bytes(), rng, is_json=name.endswith(".json"))
-    (dest / name).write_bytes(data)
-    return name, kind
+    return corrupted_copy(FIXTURES / engine, FILES[engine], dest, rng)
 
 
 def regenerate(dest: Path = FIXTURES) -> None:
