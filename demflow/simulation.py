@@ -152,10 +152,11 @@ class Simulation:
     del _a, _f
 
     def __init__(self, *, scene, x, y, r, mass, inertia, v, om, mat, wall_geo, wall_mat, law, dt, dt_crit,
-                 C, Cr, skin, gravity, track, material_names, box, fluid=None):
+                 C, Cr, skin, gravity, track, material_names, box, fluid=None, dt_safe=None):
         self.scene = scene
         self.dt = dt
-        self.dt_crit = dt_crit
+        self.dt_crit = dt_crit  # the single-spring estimate 2√(m_min/k_max), the base of dt_fraction
+        self.dt_safe = dt_crit if dt_safe is None else dt_safe  # the packing's safe estimate (integrate.safe_time_step)
         self.dt_fluid = None  # the fluid drag limit of a saturated scene (set by build)
         self.skin = skin
         self.law = law  # the law family (demflow.laws), Python side

@@ -37,6 +37,7 @@ def check_scene(scene) -> None:
         check_number("scene.dt", scene.dt, gt=0.0, unit="time")
     check_number("scene.dt_fraction", scene.dt_fraction, gt=0.0, le=1.0)
     check_flag("scene.allow_supercritical", scene.allow_supercritical)
+    check_flag("scene.allow_unsafe_dt", scene.allow_unsafe_dt)
     check_whole("scene.n_steps", scene.n_steps)
     if scene.skin is not None:
         check_number("scene.skin", scene.skin, gt=0.0, unit="length")

@@ -180,6 +180,12 @@ def _(pick):
     return _set(base_dry(), allow_supercritical=v), "scene.allow_supercritical", v
 
 
+@fault("flags", "allow_unsafe_dt")
+def _(pick):
+    v = pick(BAD_FLAG)
+    return _set(base_dry(), allow_unsafe_dt=v), "scene.allow_unsafe_dt", v
+
+
 @fault("neighbour list", "skin")
 def _(pick):
     v = pick([b for b in BAD_POSITIVE if b is not None])  # None is valid: 0.2 × the mean radius

@@ -9,7 +9,9 @@ A law family (linear, Hertz-Mindlin, ...) has two halves.
   (n_materials × n_materials) tables plus mode flags — the only thing that enters a kernel;
 - ``history_width(dim)``: the per-contact history columns it keeps in ``dim`` dimensions;
 - ``stiffness_bound(law)``: the largest contact stiffness [force/length] of one declared law, for
-  the critical time step;
+  the single-spring critical time step (the base of ``dt_fraction``);
+- ``time_step_constants(law)``: its normal and tangential springs and dashpots, for the safe
+  critical time step of a packing (:func:`demflow.integrate.safe_time_step`);
 - ``elastic_energy``: compiled, see :func:`law_energy_add`;
 - ``continue_from(hist, width)``: how history written by another stage (possibly another law or
   width) carries over;
@@ -79,6 +81,13 @@ class LawFamily:
         raise NotImplementedError
 
     def stiffness_bound(self, law) -> float:
+        raise NotImplementedError
+
+    def time_step_constants(self, law) -> tuple[float, float, float, float]:
+        """(kN, kT, cN, cT) of one declared law for the safe critical time step
+        (:func:`demflow.integrate.safe_time_step`): the largest normal and tangential spring
+        stiffness [force/length] and dashpots [force·time/length] a contact can show, kT = cT = 0
+        when the tangential force can never be elastic."""
         raise NotImplementedError
 
     def continue_from(self, hist: np.ndarray, width: int) -> np.ndarray:

@@ -229,3 +229,9 @@ class Linear(LawFamily):
 
     def stiffness_bound(self, law) -> float:
         return max(law.kn, law.ks)
+
+    def time_step_constants(self, law) -> tuple[float, float, float, float]:
+        """(kN, kS, cN, cS); a shear spring without friction or cohesion always slides (its cap
+        μFn + c is 0), so it adds no stiffness and no dashpot."""
+        sticks = law.ks > 0 and (law.friction > 0 or law.cohesion > 0)
+        return (float(law.kn), float(law.ks) if sticks else 0.0, float(law.cn), float(law.cs) if sticks else 0.0)
