@@ -118,7 +118,7 @@ def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np
 
 
 @njit_parallel
-def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext):
+def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
     ``d`` (:class:`~demflow.state.Discs`, slot order).  Each disc sums its contacts in CSR order:
@@ -132,6 +132,8 @@ def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext):
     sums; without it ``ext`` is not read.  Returns the largest squared displacement since
     (xref, yref) and the largest squared displacement of this step in radii ((|v|Δt/R)², a disc
     that jumps a large part of its radius in one step can pass through a contact unseen).
+    diss[i] += the energy disc i's global damping dissipated in the step, (C v̄² + C* ω̄²)Δt with
+    v̄ = (v_{i-1/2} + v_{i+1/2})/2 (exactly what the centred dashpot of eq 2.27 removes from ½mv²).
     """
     # fields are read into local names before the prange loop: Numba (0.68) loses writes made
     # through a namedtuple's field inside a parallel loop (see demflow.jit)
@@ -175,6 +177,10 @@ def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext):
         vyi = (vy[i] * (1.0 - a) + (sy / mass[i] + gy) * dt) / (1.0 + a)
         b = Cr[i] * dt / (2.0 * inertia[i])
         omi = (om[i] * (1.0 - b) + sm * dt / inertia[i]) / (1.0 + b)
+        mvx = 0.5 * (vx[i] + vxi)
+        mvy = 0.5 * (vy[i] + vyi)
+        mom = 0.5 * (om[i] + omi)
+        diss[i] += (C[i] * (mvx * mvx + mvy * mvy) + Cr[i] * mom * mom) * dt
         vx[i] = vxi
         vy[i] = vyi
         om[i] = omi

@@ -7,6 +7,7 @@ resumable (atomic writes).
 from __future__ import annotations
 
 import json
+import math
 import os
 import tempfile
 import time
@@ -22,7 +23,13 @@ from .scene import MAX_WHOLE, SceneError, check_whole
 from .space import wrap
 from .state import (Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
                     pair_outputs)
-from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, NONFINITE, REBUILD, run_steps, state_is_finite
+from .stepping import (BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, NONFINITE, REBUILD, elastic_energy_keys, run_steps,
+                       state_is_finite)
+from .tolerances import tol
+
+
+# A chunk's created energy below this fraction of the energies it moved is round-off (sums of ~1e4 terms).
+ENERGY_ROUND_OFF = 1e-9
 
 
 class BlowUpError(RuntimeError):
@@ -185,6 +192,12 @@ class Simulation:
                              P=np.zeros((n, 8)))
         self.records = []
         self.snapshots = []
+        # energy accounts of the running chunk (stepping.run_steps) and the last chunk's balance
+        self._energy_acc = np.zeros(3)
+        self._diss_discs = np.zeros(n)
+        self._diss_pairs = np.zeros(0)
+        self._wwork_pairs = np.zeros(0)
+        self.energy_balance = None
         # saturated scenes only (thesis §3.4): the fluid coupling and the external force it feeds
         self.fluid = None
         self.has_external_force = False
@@ -294,6 +307,8 @@ class Simulation:
         sx_p[pos[:sx.shape[0]]] = sx
         sy_p[pos[:sy.shape[0]]] = sy
         m = finder.shape[0]
+        self._diss_pairs = np.zeros(finder.shape[0])
+        self._wwork_pairs = np.zeros(finder.shape[0])
         self.pairs = Pairs(finder=finder, other=other, hist=hist, sx=sx, sy=sy, pos=pos, fin_p=fin_p, oth_p=oth_p,
                            hist_p=np.empty_like(hist), sx_p=sx_p, sy_p=sy_p, start_p=start_p, sidx_p=sidx_p,
                            wall_p=wall_p, f=np.zeros((m, 3)), out=pair_outputs(m))
@@ -355,6 +370,7 @@ class Simulation:
             nxt = [c for c in changes if c > self.step]
             stop = min(target, snaps[0] if snaps else target, self.step + self.CHUNK, nxt[0] if nxt else target)
             good = self._copy_state()
+            balance = self._balance_open()
             while self.step < stop:
                 n_run = stop - self.step
                 if self.fluid is not None:
@@ -365,10 +381,17 @@ class Simulation:
                             self._blow_up(good, pieces, rec, rec_count, f"{bad} is not finite after the fluid solve")
                     n_run = min(n_run, self._next_solve - self.step)
                 t_dem = time.perf_counter()
+                if self.has_external_force:
+                    before = (self.discs.x.copy(), self.discs.y.copy(), self.discs.th.copy())
                 done, status, self.disp_walls, rec_count = run_steps(
                     n_run, self.step, self.skin, self.disp_walls, self.discs, self._slots, self.layout,
                     self.pairs, self.walls, self.loading, self.law_params, self.box, self.dt, self.gx, self.gy,
-                    rec, rec_count, self.external_force, self.has_external_force)
+                    rec, rec_count, self.external_force, self.has_external_force, self._energy_acc,
+                    self._diss_pairs, self._wwork_pairs, self._diss_discs)
+                if self.has_external_force:  # the external force is held over the call: its work is F·Δx
+                    d, e = self.discs, self.external_force
+                    balance["external"] += float(np.sum(e[:, 0] * (d.x - before[0]) + e[:, 1] * (d.y - before[1])
+                                                        + e[:, 2] * (d.th - before[2])))
                 self.dem_s += time.perf_counter() - t_dem
                 self.step += done
                 # BLOWUP: an overlap, jump or contact force test failed; NONFINITE: the state on return holds
@@ -379,6 +402,9 @@ class Simulation:
                     self._blow_up(good, pieces, rec, rec_count, None)
                 if status == REBUILD:
                     self.rebuild()
+            why = self._balance_close(balance)
+            if why:
+                self._blow_up(good, pieces, rec, rec_count, None, why=why)
             rec_count = self._keep_records(pieces, rec, rec_count)
             if checkpoint is not None and checkpoint_every and self.step - last_ckpt >= checkpoint_every:
                 self.save_checkpoint(checkpoint)
@@ -401,11 +427,71 @@ class Simulation:
             "walls.vy": w.vy, "walls.om": w.om, "walls.cx": w.cx, "walls.cy": w.cy, "walls.force": w.force,
             "pairs.hist": self.pairs.hist})
 
-    def _blow_up(self, good, pieces, rec, rec_count, what):
+    # ------------------------------------------------------------------ energy balance
+    def mechanical_energy(self) -> tuple[float, float]:
+        """(kinetic ½Σ(m v² + I ω²), elastic) [force·length] of the current state; the elastic energy is
+        that of the springs the next step computes (the pair forces evaluated on a copy of the history, as
+        :meth:`contact_table_arrays` does), so that a fresh overlap-law contact counts from the start."""
+        d = self.discs
+        ke = float(0.5 * np.sum(d.mass * (d.vx ** 2 + d.vy ** 2) + d.inertia * d.om ** 2))
+        pr = self.pairs
+        m = pr.finder.shape[0]
+        if m == 0:
+            return ke, 0.0
+        P = np.zeros((self.n, 8))
+        pack_discs(d, P)
+        h = pr.hist.copy()
+        pair_forces(pr.finder, pr.other, h, pr.sx, pr.sy, P, self.n, self.walls, self.law_params, self.box, self.dt,
+                    np.zeros((m, 3)), False, *pair_outputs(m), np.inf, np.zeros(m), np.zeros(m))
+        return ke, float(elastic_energy_keys(pr.finder, pr.other, h, d.mat, self.walls.mat, self.n, self.law_params))
+
+    def _balance_open(self) -> dict:
+        """Start the energy balance of a chunk: the mechanical energy and unwrapped positions now, and the
+        accounts (dissipation, wall work, external work) at zero."""
+        self._energy_acc[:] = 0.0
+        ke, el = self.mechanical_energy()
+        x, y = self.unwrapped_positions()
+        return dict(step=self.step, energy=ke + el, x=x, y=y, external=0.0)
+
+    def _balance_close(self, b: dict) -> str | None:
+        """Close a chunk's energy balance (issue 17): the energy the steps created,
+
+            created = Δ(kinetic + elastic) + dissipated (dashpots, friction, global damping)
+                      - work of the walls - work of gravity - work of external (fluid) forces,
+
+        is round-off and O(Δt) discretisation in a stable run; an unstable step creates it (and friction can
+        dissipate it as fast, so that overlaps stay small).  Returns why the chunk blew up, or None; keeps
+        the numbers in ``energy_balance``."""
+        if self.step == b["step"]:
+            return None
+        ke, el = self.mechanical_energy()
+        x, y = self.unwrapped_positions()
+        d = self.discs
+        gravity = float(np.sum(d.mass * (self.gx * (x - b["x"]) + self.gy * (y - b["y"]))))
+        contacts, damping, walls = (float(v) for v in self._energy_acc)
+        e1 = ke + el
+        created = (e1 - b["energy"]) + contacts + damping - walls - gravity - b["external"]
+        supplied = b["energy"] + abs(walls) + abs(gravity) + abs(b["external"])
+        self.energy_balance = dict(start=b["step"], end=self.step, energy_start=b["energy"], energy_end=e1,
+                                   dissipated_contacts=contacts, dissipated_damping=damping, work_walls=walls,
+                                   work_gravity=gravity, work_external=b["external"], created=created,
+                                   supplied=supplied)
+        limit = tol("energy.blow-up").value
+        if math.isfinite(created) and (created <= limit * supplied or created <= ENERGY_ROUND_OFF * (e1 + contacts + damping)):
+            return None
+        return (f"the energy balance of steps {b['step']}-{self.step} does not close: the steps created {created:.6g} "
+                f"(Δ(kinetic + elastic) {e1 - b['energy']:.6g} + dissipated {contacts + damping:.6g} - work of walls "
+                f"{walls:.6g}, gravity {gravity:.6g} and external forces {b['external']:.6g}), more than "
+                f"{limit:g} × the {supplied:.6g} the chunk started with or was given (tolerance 'energy.blow-up', "
+                f"demflow/tolerances.py): the time step is unstable. Reduce dt (now {self.dt:.4g}, safe estimate "
+                f"{self.dt_safe:.4g}, demflow.integrate.safe_time_step)")
+
+    def _blow_up(self, good, pieces, rec, rec_count, what, why=None):
         """Keep the records so far, restore the last good state ``good``, save it and raise BlowUpError;
         ``what`` names a non-finite quantity (None: the cycle stopped on its own tests, BLOWUP or NONFINITE,
-        and the state is searched for the quantity to name)."""
-        if what is None:  # name the non-finite quantity, if there is one
+        and the state is searched for the quantity to name); ``why`` (the energy balance) replaces the
+        message's reason."""
+        if what is None and why is None:  # name the non-finite quantity, if there is one
             bad = self._nonfinite_state()
             what = f"{bad} is not finite" if bad else None
         self._keep_records(pieces, rec, rec_count)
@@ -413,11 +499,11 @@ class Simulation:
         bad_step = self.step
         self._restore_state(good)
         path = self._save_last_good()
-        if what is None:
+        if why is None and what is None:
             why = (f"a contact overlapped more than {MAX_OVERLAP_RATIO:.0%} of a radius, a disc moved more than "
                    f"{MAX_STEP_RATIO:.0%} of its radius in one step, or a force became non-finite. Reduce dt (now "
-                   f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
-        else:
+                   f"{self.dt:.4g}, safe estimate {self.dt_safe:.4g}) or the loading rate")
+        elif why is None:
             why = (f"{what} (its origin may be gravity (now ({self.gx}, {self.gy})), an external or fluid force, a "
                    f"contact law or a wall's motion). Check those for NaN or infinite values, then reduce dt (now "
                    f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
@@ -470,7 +556,7 @@ class Simulation:
         pack_discs(self.discs, P)
         out = pair_outputs(m)
         pair_forces(pr.finder, pr.other, pr.hist.copy(), pr.sx, pr.sy, P, self.n, self.walls, self.law_params,
-                    self.box, self.dt, np.zeros((m, 3)), True, *out, np.inf)
+                    self.box, self.dt, np.zeros((m, 3)), True, *out, np.inf, np.zeros(m), np.zeros(m))
         fn, fs, slide, ovl, cpx, cpy = out
         on = ovl > 0
         i, j = self.finder[on], self.other[on]

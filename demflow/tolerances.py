@@ -200,6 +200,16 @@ TOLERANCES = {
         "A difference that is O(θ²) per step with θ ∝ Δt sums to O(Δt) over a contact: halving Δt halves it "
         "(ratio 0.5). ±0.1 separates first order from a Δt-independent model difference (ratio 1) and from "
         "second order (0.25); measured 0.506 (YADE) and 0.490 (LIGGGHTS).", absolute=True, kind="cross-code"),
+    "energy.blow-up": Tolerance(
+        0.25,
+        "Blow-up by energy (issue 17 item 4): a chunk blows up when the energy its steps created (Δ(kinetic + "
+        "elastic) + dissipated - work of walls, gravity and external forces) exceeds this fraction of the energy it "
+        "started with plus the work it was given. Measured in stable runs: ≤ 1e-9 (perturbed hexagonal packing up "
+        "to 0.99× its critical Δt), 1.7e-3 (golden box: servo, dashpots, friction, gravity), ≤ 0.025 (a disc dropped "
+        "spinning on a floor, 200-step chunks: the incremental law's contact onset), 0.043 (one disc under a servo "
+        "lid whose gain moves it by its whole force error per step; tests/test_energy_blowup.py); unstable: ≈ 100 "
+        "(hexagonal packing at 1.05× its critical Δt, first 1000 steps), ≈ 430 at 1.2×. 0.25 is 6× the largest "
+        "stable value and 400× below the smallest unstable one.", kind="self-consistency"),
 }
 
 

@@ -25,6 +25,9 @@ inlined into the pair pass and is a pure function of scalars and the contact's h
 
 - ``law_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt) -> (Fn, Fs, sliding)``: advance
   contact k's history row by one step and return its total normal and shear force;
+- ``law_force_dissipation(...) -> (Fn, Fs, sliding, dissipated, Fn_work, Fs_work)``: the same, plus
+  the energy its dashpots and friction dissipated in the step and the forces that worked over it (the
+  energy balance of :mod:`demflow.simulation`);
 - ``law_separate(law, hist, k)``: the pair is apart: clear its history;
 - ``law_energy_add(law, e, hist, k, ma, mb) -> e``: add the energy stored in contact k's springs.
 
@@ -39,6 +42,16 @@ import numpy as np
 
 def law_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
     """Advance contact k by one step; returns (Fn, Fs, sliding).  Compiled per law (overload)."""
+    raise NotImplementedError(f"no compiled law for parameters of type {type(law).__name__}")
+
+
+def law_force_dissipation(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
+    """:func:`law_force` plus, for the energy balance, the energy the contact dissipated in this step
+    [force·length] (its dashpots and its friction slip) and the normal and shear forces that did work
+    over the step (Fn_work, Fs_work: the work of a relative displacement d is Fn_work·dₙ + Fs_work·dₛ,
+    so that a moving wall's work is counted with the forces its move produced); returns
+    (Fn, Fs, sliding, dissipated, Fn_work, Fs_work), Fn, Fs and the history exactly as :func:`law_force`
+    gives them.  Compiled per law (overload)."""
     raise NotImplementedError(f"no compiled law for parameters of type {type(law).__name__}")
 
 
