@@ -203,13 +203,15 @@ TOLERANCES = {
     "energy.blow-up": Tolerance(
         0.25,
         "Blow-up by energy (issue 17 item 4): a chunk blows up when the energy its steps created (Δ(kinetic + "
-        "elastic) + dissipated - work of walls, gravity and external forces) exceeds this fraction of the energy it "
-        "started with plus the work it was given. Measured in stable runs: ≤ 1e-9 (perturbed hexagonal packing up "
-        "to 0.99× its critical Δt), 1.7e-3 (golden box: servo, dashpots, friction, gravity), ≤ 0.025 (a disc dropped "
-        "spinning on a floor, 200-step chunks: the incremental law's contact onset), 0.043 (one disc under a servo "
-        "lid whose gain moves it by its whole force error per step; tests/test_energy_blowup.py); unstable: ≈ 100 "
-        "(hexagonal packing at 1.05× its critical Δt, first 1000 steps), ≈ 430 at 1.2×. 0.25 is 6× the largest "
-        "stable value and 400× below the smallest unstable one.", kind="self-consistency"),
+        "elastic) + dissipated - work of walls, gravity and external forces; kinetic as ½m v_{n-1/2}·v_{n+1/2}) "
+        "exceeds this fraction of the energy it started with plus the work it was given. Measured in stable runs "
+        "(5 chunks each): ≤ 1.4e-14 (perturbed hexagonal packing up to 0.99× its critical Δt), ≤ 7.3e-4 (every "
+        "scene of thesis-one-disc, -five-discs, -impact, -sedimentation and cs-nine-disc), 2.9e-3 (golden box: "
+        "servo, dashpots, friction, gravity; 250-step chunks), ≤ 0.024 (one disc bouncing, sliding, shaken or "
+        "under a servo lid, 200-step chunks: the incremental normal spring's start at a contact); unstable: ≈ 98 "
+        "(hexagonal packing at 1.05× its critical Δt, first 1000 steps), ≈ 430 at 1.2×, and 0.9-6.9 "
+        "(thesis-liquefaction at its Δt, 4.4× the safe estimate). 0.25 is 10× the largest stable value and 4× "
+        "below the smallest unstable one.", kind="self-consistency"),
 }
 
 

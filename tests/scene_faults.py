@@ -186,6 +186,12 @@ def _(pick):
     return _set(base_dry(), allow_unsafe_dt=v), "scene.allow_unsafe_dt", v
 
 
+@fault("flags", "energy_check")
+def _(pick):
+    v = pick(["stop", "", None, True, 1, "RAISE"])
+    return _set(base_dry(), energy_check=v), "scene.energy_check", v
+
+
 @fault("neighbour list", "skin")
 def _(pick):
     v = pick([b for b in BAD_POSITIVE if b is not None])  # None is valid: 0.2 × the mean radius

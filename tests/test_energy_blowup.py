@@ -63,14 +63,14 @@ def test_hexagonal_packing_overlaps_stay_small_while_it_blows_up():
 @pytest.mark.parametrize("fraction", [0.5, 0.95])
 def test_stable_hexagonal_packing_runs_and_its_balance_closes(fraction):
     """Negative control: below the critical Δt (0.95× is above the safe estimate: build warns) the run
-    completes; with no dissipation and no work the balance closes to round-off (measured ≤ 1e-9)."""
+    completes; with no dissipation and no work the balance closes to round-off (measured ≤ 1.4e-14)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UnsafeTimeStepWarning)
         sim = build(_hexagonal(fraction))
     for _ in range(5):
         sim.run(1000)
         b = sim.energy_balance
-        assert abs(b["created"]) <= 1e-6 * b["supplied"], b
+        assert abs(b["created"]) <= 1e-10 * b["supplied"], b
 
 
 def _floor_scene(name, disc, walls, **kw):
@@ -95,15 +95,30 @@ FLOOR = Wall("floor", (0.0, 0.0), (1.0, 0.0), -100.0, 100.0, "w")
 ])
 def test_dissipation_and_work_are_accounted(name, disc, walls, kw):
     """Friction slip, dashpots, global damping, gravity, a wall shaken every step and a servo wall: the
-    energy each 200-step chunk creates is below 8 % of what it started with and was given (measured: 2.5 %
-    bouncing, the incremental normal spring's start at a contact; 4.3 % the servo lid, whose gain moves it
-    by its whole force error each step), a third of the blow-up tolerance, and the accounts are not empty
-    (dissipation and work happened)."""
+    energy each 200-step chunk creates is below 5 % of what it started with and was given (measured: 2.4 %
+    bouncing, the incremental normal spring's start at a contact; 0.19 % sliding, 0.76 % shaken, 0.76 % the
+    servo lid, whose gain moves it by its whole force error each step), a fifth of the blow-up tolerance,
+    and the accounts are not empty (dissipation and work happened)."""
     sim = build(_floor_scene(name, disc, walls, **kw))
     moved = 0.0
     for _ in range(10):
         sim.run(200)
         b = sim.energy_balance
-        assert abs(b["created"]) <= 0.08 * b["supplied"], b
+        assert abs(b["created"]) <= 0.05 * b["supplied"], b
         moved += b["dissipated_contacts"] + b["dissipated_damping"] + abs(b["work_walls"])
     assert moved > 0.0
+
+
+def test_energy_check_warn_lets_the_run_go_on():
+    """energy_check="warn" (a shipped case kept as it is until its owner decides): the same unstable run
+    warns and completes."""
+    from demflow import EnergyBalanceWarning
+
+    sc = _hexagonal(1.05)
+    sc.energy_check, sc.n_steps = "warn", 300
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnsafeTimeStepWarning)
+        sim = build(sc)
+    with pytest.warns(EnergyBalanceWarning, match="energy balance"):
+        sim.run()
+    assert sim.step == 300
