@@ -6,13 +6,14 @@ a message that names the value, the constraint and the fix.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
 from .contacts.neighbours import point_segment_distance
-from .integrate import critical_time_step
+from .integrate import critical_time_step, safe_time_step
 from .laws import FAMILIES
-from .scene import Scene, SceneError, Superquadrics, check_vector, is_number, type_phrase
+from .scene import Scene, SceneError, Superquadrics, UnsafeTimeStepWarning, check_vector, is_number, type_phrase
 from .space import open_box, periodic_box, wrap
 from .state import PeriodicBox
 from .validate import check_scene
@@ -324,6 +325,47 @@ def material_laws(scene, mats: list):
     return mat_names, mid, used, law, k_max
 
 
+def _safe_time_step(scene: Scene, family, used: dict, r, mass, inertia, mats, mid) -> dict:
+    """:func:`demflow.integrate.safe_time_step` of the scene: its laws' springs and dashpots by
+    disc material pair and against the walls (each wall by its own law)."""
+    disc_mat = np.array([mid[m] for m in mats], dtype=np.int64)
+    present = set(mats)
+    count = {m: mats.count(m) for m in present}
+    disc_laws = {}
+    for a in present:
+        for b in present:
+            if a != b or count[a] >= 2:
+                disc_laws[(mid[a], mid[b])] = family.time_step_constants(scene.law_for(a, b))
+    wall_laws = {}
+    for a in present:
+        wall_laws[mid[a]] = [family.time_step_constants(scene.law_for(a, w.material)) for w in scene.walls]
+    return safe_time_step(r, mass, inertia, disc_mat, disc_laws, wall_laws)
+
+
+def _unsafe_dt(scene: Scene, dt: float, dt_crit: float, safe: dict, mass, r) -> None:
+    """Refuse (or, with allow_unsafe_dt or allow_supercritical, warn about) a step above the safe critical
+    time step."""
+    i = safe["disc"]
+    how = (f"the highest mode of a packing, translations and rotations coupled through the shear springs: "
+           f"ω_max² <= {safe['omega2']:.6g} (disc {i}, mass {mass[i]:.6g}, radius {r[i]:.6g}, up to "
+           f"{safe['contacts']} contacts), dashpot rate <= {safe['gamma']:.6g}; demflow.integrate.safe_time_step")
+    where = (f"scene.dt={dt:.6g}" if scene.dt is not None else
+             f"scene.dt_fraction={scene.dt_fraction!r} gives dt={dt:.6g} ({scene.dt_fraction!r} × 2√(m_min/k_max), "
+             f"{dt_crit:.6g}), which")
+    if scene.allow_supercritical or scene.allow_unsafe_dt:
+        flag = "allow_supercritical" if scene.allow_supercritical else "allow_unsafe_dt"
+        warnings.warn(f"scene {scene.name!r}: {where} is above the safe critical time step {safe['dt']:.6g} ({how}); "
+                      f"allowed by {flag}=True: the run may grow unstable (the energy check raises BlowUpError)",
+                      UnsafeTimeStepWarning, stacklevel=3)
+        return
+    fix = (f"give dt <= {safe['dt']:.6g}" if scene.dt is not None else
+           f"give dt_fraction <= {safe['dt'] / dt_crit:.4g}")
+    raise SceneError(f"{where} is above the safe critical time step {safe['dt']:.6g} ({how}); {fix} "
+                     f"(e.g. half of it), or set allow_unsafe_dt=True to run it anyway (a packing looser than the worst case "
+                     "the estimate assumes can be stable above it)")
+
+
+
 def wall_geometry(scene) -> list:
     """Per wall of ``scene.walls`` (fields checked by Wall.check): (ax, ay, bx, by, px, py, ex, ey), the
     endpoints A = P + h1·e, B = P + h2·e, the point P and the unit direction e, with every endpoint
@@ -368,8 +410,11 @@ def build(scene: Scene):
 
     mat_names, mid, used, law, k_max = material_laws(scene, mats)
 
-    # time step
+    # time step: dt_fraction is a fraction of the single-spring estimate (so that derived steps stay what
+    # they were); the step is refused above the safe estimate of the packing's highest mode
     dt_crit = critical_time_step(mass, k_max)
+    safe = _safe_time_step(scene, law, used, r, mass, inertia, mats, mid)
+    dt_safe = safe["dt"]
     if scene.dt is None:
         dt = float(scene.dt_fraction) * dt_crit
         if not (math.isfinite(dt) and dt > 0):
@@ -383,6 +428,8 @@ def build(scene: Scene):
                 f"(m_min={mass.min():.6g}, k_max={k_max:.6g}); use dt <= {0.1 * dt_crit:.6g} "
                 "(10 % of critical, thesis §2.2.4.4) or set allow_supercritical=True"
             )
+    if dt > dt_safe:
+        _unsafe_dt(scene, dt, dt_crit, safe, mass, r)
 
     box = _check_box(scene, r, x, y)
     if n:
@@ -409,7 +456,7 @@ def build(scene: Scene):
         scene=scene, x=x, y=y, r=r, mass=mass, inertia=inertia, v=v, om=om,
         mat=np.array([mid[m] for m in mats], dtype=np.int64),
         wall_geo=wall_geo, wall_mat=np.array([mid[w.material] for w in scene.walls], dtype=np.int64),
-        law=law, dt=dt, dt_crit=dt_crit, C=C, Cr=Cr, skin=skin,
+        law=law, dt=dt, dt_crit=dt_crit, dt_safe=dt_safe, C=C, Cr=Cr, skin=skin,
         gravity=tuple(map(float, scene.gravity)), track=track, material_names=mat_names, fluid=fluid, box=box,
     )
     if fluid is not None:

@@ -21,15 +21,104 @@ from .jit import njit_parallel
 
 
 def critical_time_step(mass: np.ndarray, stiffness_max: float) -> float:
-    """Estimated critical time step 2√(m_min/k_max) (thesis §2.2.4.4) [time]."""
+    """Estimated critical time step 2√(m_min/k_max) (thesis §2.2.4.4) [time].
+
+    The single-spring estimate: one mass on one spring.  It is the base of ``Scene.dt_fraction``
+    (kept so that every derived Δt stays what it was), not a stability guarantee: a packing's
+    discs have several contacts each, and with a shear spring the rotations couple in, so the
+    highest mode of a frictional packing is several times stiffer (:func:`safe_time_step`).
+    """
     if mass.size == 0 or stiffness_max <= 0:
         return math.inf
     return 2.0 * math.sqrt(float(mass.min()) / stiffness_max)
 
 
+def kissing_number(R: np.ndarray, r: float) -> np.ndarray:
+    """How many discs of radius ``r`` can touch a disc of radius R without overlapping each other:
+    ⌊π / arcsin(r/(R + r))⌋ (each subtends 2 arcsin(r/(R + r)) seen from the centre; 6 for equal
+    discs).  A uniform relative overlap of every contact leaves the count unchanged."""
+    return np.floor(math.pi / np.arcsin(r / (R + r)) + 1e-9)
+
+
+def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np.ndarray, disc_laws: dict,
+                   wall_laws: dict) -> dict:
+    """A critical time step that is safe for any packing the scene's discs can form [time].
+
+    The central-difference scheme is stable while Δt ≤ 2/ω_max, ω_max² the largest eigenvalue of
+    M⁻¹K, K the stiffness of every contact in the translations and rotations of the discs
+    (O'Sullivan & Bray 2004 bound it with Gershgorin's theorem; the bound below is derived the
+    same way).  In mass-scaled coordinates q = M^½ u a contact between discs i and j with normal
+    n and tangent t stores ½(a·q)² + ½(b·q)², a = √kN (−n/√m_i, 0, n/√m_j, 0) and
+    b = √kT (−t/√m_i, −R_i/√I_i, t/√m_j, −R_j/√I_j).  a and b are orthogonal on each disc, so with
+    A_i = max(kN/m_i, kT(1/m_i + R_i²/I_i)) and (x + y)² ≤ (1 + s)x² + (1 + 1/s)y², s = √(A_j/A_i),
+    the contact adds at most √A_i(√A_i + √A_j)|q_i|² to disc i's row (a wall: A_j = 0), and
+
+        ω_max² ≤ max_i Σ_{contacts of i} √A_i (√A_i + √A_j).
+
+    Unknown future contacts are bounded a priori: disc i touches at most :func:`kissing_number`
+    (R_i, r_min) discs (a wall takes at least a disc's angular room, and its term is never larger)
+    and at most every other disc and wall, each through the law of its material pair that gives the
+    largest term and against the lightest disc of the partner's material; a disc whose material
+    meets no disc touches at most one contact per wall.  For equal discs with kT = kN: 6 contacts, ω_max² ≤ 36 kN/m, Δt ≤ 0.333√(m/kN)
+    (the all-discs-spinning mode of a hexagonal packing has ω² = 24 kN/m, Δt = 0.408√(m/kN)).
+
+    Contact dashpots act on the lagged half-step velocities: a mode of frequency ω with damping
+    rate γ is stable for Δt ≤ (√(γ² + 4ω²) − γ)/ω² (= (2/ω)(√(1 + ζ²) − ζ), Belytschko 1983);
+    γ is bounded like ω² with the dashpots in place of the springs.  Global damping is centred
+    (eq 2.27) and does not lower the limit.
+
+    ``disc_laws`` {(material a, material b): (kN, kT, cN, cT)} for every pair of disc materials
+    that can meet (both orders), ``wall_laws`` {material a: [(kN, kT, cN, cT), ...]} the laws of
+    disc material a against the walls; kT and cT are the shear spring and dashpot that can act
+    (zero for a law that always slides).  Returns dict(dt, omega2, gamma, disc, contacts): the
+    safe step, the bounds on ω_max² and γ_max, the disc whose row gives ω_max² and its contact
+    count.
+    """
+    n = r.shape[0]
+    if n == 0:
+        return dict(dt=math.inf, omega2=0.0, gamma=0.0, disc=-1, contacts=0)
+    inv_m = 1.0 / mass
+    rot = inv_m + r * r / inertia
+    mats = np.unique(mat)
+    inv_m_max = {int(b): float(inv_m[mat == b].max()) for b in mats}
+    rot_max = {int(b): float(rot[mat == b].max()) for b in mats}
+
+    def rows(which):  # which = 0: springs (kN, kT), 2: dashpots (cN, cT)
+        term = np.zeros(n)
+        count = np.zeros(n)
+        for a in mats:
+            a = int(a)
+            sel = mat == a
+            partners = [(law, b) for (ma, b), law in disc_laws.items() if ma == a]
+            n_walls = len(wall_laws.get(a, ()))
+            if partners:  # at most the kissing number, and at most every other disc and wall
+                others = sum(int((mat == b).sum()) - (b == a) for _, b in partners)
+                count[sel] = np.minimum(kissing_number(r[sel], float(r.min())), others + n_walls)
+            else:
+                count[sel] = n_walls
+            best = np.zeros(int(sel.sum()))
+            for law, b in partners + [(law, None) for law in wall_laws.get(a, ())]:
+                kn, kt = law[which], law[which + 1]
+                Ai = np.maximum(kn * inv_m[sel], kt * rot[sel])
+                Aj = 0.0 if b is None else max(kn * inv_m_max[int(b)], kt * rot_max[int(b)])
+                best = np.maximum(best, np.sqrt(Ai) * (np.sqrt(Ai) + math.sqrt(Aj)))
+            term[sel] = best
+        return count * term, count
+
+    s_k, count = rows(0)
+    s_c, _ = rows(2)
+    i = int(np.argmax(s_k))
+    w2, g = float(s_k[i]), float(s_c.max())
+    if w2 <= 0.0:
+        dt = math.inf
+    else:
+        dt = (math.sqrt(g * g + 4.0 * w2) - g) / w2
+    return dict(dt=dt, omega2=w2, gamma=g, disc=i, contacts=int(count[i]))
+
+
 
 @njit_parallel
-def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext):
+def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
     ``d`` (:class:`~demflow.state.Discs`, slot order).  Each disc sums its contacts in CSR order:
@@ -43,6 +132,8 @@ def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext):
     sums; without it ``ext`` is not read.  Returns the largest squared displacement since
     (xref, yref) and the largest squared displacement of this step in radii ((|v|Δt/R)², a disc
     that jumps a large part of its radius in one step can pass through a contact unseen).
+    diss[i] += the energy disc i's global damping dissipated in the step, (C v̄² + C* ω̄²)Δt with
+    v̄ = (v_{i-1/2} + v_{i+1/2})/2 (exactly what the centred dashpot of eq 2.27 removes from ½mv²).
     """
     # fields are read into local names before the prange loop: Numba (0.68) loses writes made
     # through a namedtuple's field inside a parallel loop (see demflow.jit)
@@ -86,6 +177,10 @@ def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext):
         vyi = (vy[i] * (1.0 - a) + (sy / mass[i] + gy) * dt) / (1.0 + a)
         b = Cr[i] * dt / (2.0 * inertia[i])
         omi = (om[i] * (1.0 - b) + sm * dt / inertia[i]) / (1.0 + b)
+        mvx = 0.5 * (vx[i] + vxi)
+        mvy = 0.5 * (vy[i] + vyi)
+        mom = 0.5 * (om[i] + omi)
+        diss[i] += (C[i] * (mvx * mvx + mvy * mvy) + Cr[i] * mom * mom) * dt
         vx[i] = vxi
         vy[i] = vyi
         om[i] = omi

@@ -28,6 +28,15 @@ class SceneError(ValueError):
     """A scene that cannot be built; the message names the field, the value, the constraint and the fix."""
 
 
+class EnergyBalanceWarning(UserWarning):
+    """A chunk's energy balance did not close (an unstable step) in a scene with ``energy_check="warn"``."""
+
+
+class UnsafeTimeStepWarning(UserWarning):
+    """A scene runs with a time step above the safe critical estimate because it asked to
+    (``allow_supercritical=True``)."""
+
+
 def check_identifier(kind: str, name: str) -> str:
     """Names (scene, material, wall) are identifiers: letters, digits, '_' and '-'.
 
@@ -578,7 +587,16 @@ class Scene:
             run by :mod:`demflow.simulation_sq2d`)
 
     dt : the time step, or None for ``dt_fraction`` × 2√(m_min/k_max) (thesis §2.2.4.4)
-    allow_supercritical : accept a dt above the critical estimate (refused otherwise)
+    allow_supercritical : accept a dt above the critical estimates (refused otherwise)
+    allow_unsafe_dt : accept a dt above the safe critical estimate of a packing
+        (:func:`demflow.integrate.safe_time_step`: several contacts per disc, rotations coupled by the
+        shear springs, dashpots) but below the single-spring one, with an UnsafeTimeStepWarning; for a
+        scene whose packing is known to be looser than the estimate's worst case (the energy check
+        still stops a run that grows unstable: BlowUpError)
+    energy_check : what a chunk whose energy balance does not close does (issue 17: the steps created
+        energy, an unstable step): "raise" BlowUpError with the last good state (default), or "warn"
+        (EnergyBalanceWarning, the run goes on: for a shipped case known to be unstable whose results are
+        kept until its owner decides)
     n_steps : default run length in steps (cycles)
     skin : neighbour-list margin (thesis DNTOL, eq 2.33) [length]; None = 0.2 × mean radius
     fluid : the pore fluid (:class:`Fluid`) of a saturated scene; None for a dry one
@@ -596,6 +614,8 @@ class Scene:
     dt: float | None = None
     dt_fraction: float = 0.1
     allow_supercritical: bool = False
+    allow_unsafe_dt: bool = False
+    energy_check: str = "raise"
     n_steps: int = 1000
     skin: float | None = None
     overlap_tolerance: float = 1e-6

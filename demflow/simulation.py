@@ -7,9 +7,11 @@ resumable (atomic writes).
 from __future__ import annotations
 
 import json
+import math
 import os
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -18,11 +20,17 @@ from .contacts.forces import pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
-from .scene import MAX_WHOLE, SceneError, check_whole
+from .scene import MAX_WHOLE, EnergyBalanceWarning, SceneError, check_whole
 from .space import wrap
 from .state import (Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
                     pair_outputs)
-from .stepping import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, NONFINITE, REBUILD, run_steps, state_is_finite
+from .stepping import (BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, NONFINITE, REBUILD, elastic_energy_keys, run_steps,
+                       state_is_finite)
+from .tolerances import tol
+
+
+# A chunk's created energy below this fraction of the energies it moved is round-off (sums of ~1e4 terms).
+ENERGY_ROUND_OFF = 1e-9
 
 
 class BlowUpError(RuntimeError):
@@ -194,10 +202,11 @@ class Simulation:
     del _a, _f
 
     def __init__(self, *, scene, x, y, r, mass, inertia, v, om, mat, wall_geo, wall_mat, law, dt, dt_crit,
-                 C, Cr, skin, gravity, track, material_names, box, fluid=None):
+                 C, Cr, skin, gravity, track, material_names, box, fluid=None, dt_safe=None):
         self.scene = scene
         self.dt = dt
-        self.dt_crit = dt_crit
+        self.dt_crit = dt_crit  # the single-spring estimate 2√(m_min/k_max), the base of dt_fraction
+        self.dt_safe = dt_crit if dt_safe is None else dt_safe  # the packing's safe estimate (integrate.safe_time_step)
         self.dt_fluid = None  # the fluid drag limit of a saturated scene (set by build)
         self.skin = skin
         self.law = law  # the law family (demflow.laws), Python side
@@ -226,6 +235,12 @@ class Simulation:
                              P=np.zeros((n, 8)))
         self.records = []
         self.snapshots = []
+        # energy accounts of the running chunk (stepping.run_steps) and the last chunk's balance
+        self._energy_acc = np.zeros(3)
+        self._diss_discs = np.zeros(n)
+        self._diss_pairs = np.zeros(0)
+        self._wwork_pairs = np.zeros(0)
+        self.energy_balance = None
         # saturated scenes only (thesis §3.4): the fluid coupling and the external force it feeds
         self.fluid = None
         self.has_external_force = False
@@ -301,6 +316,8 @@ class Simulation:
         sx_p[pos[:sx.shape[0]]] = sx
         sy_p[pos[:sy.shape[0]]] = sy
         m = finder.shape[0]
+        self._diss_pairs = np.zeros(finder.shape[0])
+        self._wwork_pairs = np.zeros(finder.shape[0])
         self.pairs = Pairs(finder=finder, other=other, hist=hist, sx=sx, sy=sy, pos=pos, fin_p=fin_p, oth_p=oth_p,
                            hist_p=np.empty_like(hist), sx_p=sx_p, sy_p=sy_p, start_p=start_p, sidx_p=sidx_p,
                            wall_p=wall_p, f=np.zeros((m, 3)), out=pair_outputs(m))
@@ -371,6 +388,7 @@ class Simulation:
             nxt = [c for c in changes if c > self.step]
             stop = min(target, snaps[0] if snaps else target, self.step + self.CHUNK, nxt[0] if nxt else target)
             good = self._copy_state()
+            balance = self._balance_open()
             while self.step < stop:
                 n_run = stop - self.step
                 if self.fluid is not None:
@@ -381,10 +399,17 @@ class Simulation:
                             self._blow_up(good, pieces, rec, rec_count, f"{bad} is not finite after the fluid solve")
                     n_run = min(n_run, self._next_solve - self.step)
                 t_dem = time.perf_counter()
+                if self.has_external_force:
+                    before = (self.discs.x.copy(), self.discs.y.copy(), self.discs.th.copy())
                 done, status, self.disp_walls, rec_count = run_steps(
                     n_run, self.step, self.skin, self.disp_walls, self.discs, self._slots, self.layout,
                     self.pairs, self.walls, self.loading, self.law_params, self.box, self.dt, self.gx, self.gy,
-                    rec, rec_count, self.external_force, self.has_external_force)
+                    rec, rec_count, self.external_force, self.has_external_force, self._energy_acc,
+                    self._diss_pairs, self._wwork_pairs, self._diss_discs)
+                if self.has_external_force:  # the external force is held over the call: its work is F·Δx
+                    d, e = self.discs, self.external_force
+                    balance["external"] += float(np.sum(e[:, 0] * (d.x - before[0]) + e[:, 1] * (d.y - before[1])
+                                                        + e[:, 2] * (d.th - before[2])))
                 self.dem_s += time.perf_counter() - t_dem
                 self.step += done
                 if self._bar is not None:
@@ -397,6 +422,12 @@ class Simulation:
                     self._blow_up(good, pieces, rec, rec_count, None)
                 if status == REBUILD:
                     self.rebuild()
+            why = self._balance_close(balance)
+            if why and self.scene.energy_check == "warn":
+                warnings.warn(f"scene {self.scene.name!r}: {why} (energy_check='warn': the run goes on)",
+                              EnergyBalanceWarning, stacklevel=3)
+            elif why:
+                self._blow_up(good, pieces, rec, rec_count, None, why=why)
             rec_count = self._keep_records(pieces, rec, rec_count)
             if checkpoint is not None and checkpoint_every and self.step - last_ckpt >= checkpoint_every:
                 self.save_checkpoint(checkpoint)
@@ -419,11 +450,104 @@ class Simulation:
             "walls.vy": w.vy, "walls.om": w.om, "walls.cx": w.cx, "walls.cy": w.cy, "walls.force": w.force,
             "pairs.hist": self.pairs.hist})
 
-    def _blow_up(self, good, pieces, rec, rec_count, what):
+    # ------------------------------------------------------------------ energy balance
+    def mechanical_energy(self) -> dict:
+        """The energy of the current state (step n: positions x_n, velocities v_{n-1/2}) as the balance
+        counts it [force·length]:
+
+        - ``kinetic``: ½Σ(m v_{n-1/2}·v_{n+1/2} + I ω_{n-1/2} ω_{n+1/2}), the product of the half-step
+          velocities either side of step n (v_{n+1/2} predicted from the forces at step n): with it the
+          change of kinetic energy over a step is exactly the mean of the step's end forces times its
+          displacement, so that gravity's work m g·Δx and a linear spring's ½kΔδ² close to round-off;
+        - ``elastic``: the springs at step n (the pair forces evaluated on a copy of the history, as
+          :meth:`contact_table_arrays` does: a fresh overlap-law contact counts from the start);
+        - ``dissipated`` and ``work_walls``: what that evaluation's step will add to the accounts (the
+          next chunk counts them again: they cancel across chunks).
+        """
+        d = self.discs
+        n = self.n
+        pr = self.pairs
+        m = pr.finder.shape[0]
+        P = np.zeros((n, 8))
+        pack_discs(d, P)
+        h = pr.hist.copy()
+        f = np.zeros((m, 3))
+        diss, wwork = np.zeros(m), np.zeros(m)
+        if m:
+            pair_forces(pr.finder, pr.other, h, pr.sx, pr.sy, P, n, self.walls, self.law_params, self.box, self.dt,
+                        f, False, *pair_outputs(m), np.inf, diss, wwork)
+        # each disc's force and moment sums at step n (as demflow.integrate.sum_and_integrate), then v_{n+1/2}
+        fx, fy, mo = np.zeros(n), np.zeros(n), np.zeros(n)
+        if m:
+            disc = pr.other < n
+            np.add.at(fx, pr.finder, f[:, 0])
+            np.add.at(fy, pr.finder, f[:, 1])
+            np.add.at(mo, pr.finder, f[:, 2] * d.r[pr.finder])
+            np.subtract.at(fx, pr.other[disc], f[disc, 0])
+            np.subtract.at(fy, pr.other[disc], f[disc, 1])
+            np.add.at(mo, pr.other[disc], f[disc, 2] * d.r[pr.other[disc]])
+        if self.has_external_force:
+            fx, fy, mo = fx + self.external_force[:, 0], fy + self.external_force[:, 1], mo + self.external_force[:, 2]
+        dt = self.dt
+        a = d.C * dt / (2.0 * d.mass)
+        b = d.Cr * dt / (2.0 * d.inertia)
+        vx = (d.vx * (1.0 - a) + (fx / d.mass + self.gx) * dt) / (1.0 + a)
+        vy = (d.vy * (1.0 - a) + (fy / d.mass + self.gy) * dt) / (1.0 + a)
+        om = (d.om * (1.0 - b) + mo * dt / d.inertia) / (1.0 + b)
+        ke = float(0.5 * np.sum(d.mass * (d.vx * vx + d.vy * vy) + d.inertia * d.om * om))
+        el = float(elastic_energy_keys(pr.finder, pr.other, h, d.mat, self.walls.mat, n, self.law_params)) if m else 0.0
+        return dict(kinetic=ke, elastic=el, dissipated=float(diss.sum()), work_walls=float(wwork.sum()))
+
+    def _balance_open(self) -> dict:
+        """Start the energy balance of a chunk: the energy now (:meth:`mechanical_energy`), the unwrapped
+        positions, and the accounts (dissipation, wall work, external work) at zero."""
+        self._energy_acc[:] = 0.0
+        x, y = self.unwrapped_positions()
+        return dict(step=self.step, now=self.mechanical_energy(), x=x, y=y, external=0.0)
+
+    def _balance_close(self, b: dict) -> str | None:
+        """Close a chunk's energy balance (issue 17): the energy the steps created,
+
+            created = Δ(kinetic + elastic) + dissipated (dashpots, friction, global damping)
+                      - work of the walls - work of gravity - work of external (fluid) forces,
+
+        is round-off and O(Δt) discretisation in a stable run; an unstable step creates it (and friction can
+        dissipate it as fast, so that overlaps stay small).  Returns why the chunk blew up, or None; keeps
+        the numbers in ``energy_balance``."""
+        if self.step == b["step"]:
+            return None
+        now0, now1 = b["now"], self.mechanical_energy()
+        x, y = self.unwrapped_positions()
+        d = self.discs
+        gravity = float(np.sum(d.mass * (self.gx * (x - b["x"]) + self.gy * (y - b["y"]))))
+        contacts, damping, walls = (float(v) for v in self._energy_acc)
+        # the accounts are one pair evaluation behind the energy (mechanical_energy): shift them
+        contacts += now1["dissipated"] - now0["dissipated"]
+        walls += now1["work_walls"] - now0["work_walls"]
+        e0 = now0["kinetic"] + now0["elastic"]
+        e1 = now1["kinetic"] + now1["elastic"]
+        created = (e1 - e0) + contacts + damping - walls - gravity - b["external"]
+        supplied = abs(e0) + abs(walls) + abs(gravity) + abs(b["external"])
+        self.energy_balance = dict(start=b["step"], end=self.step, energy_start=e0, energy_end=e1,
+                                   dissipated_contacts=contacts, dissipated_damping=damping, work_walls=walls,
+                                   work_gravity=gravity, work_external=b["external"], created=created,
+                                   supplied=supplied)
+        limit = tol("energy.blow-up").value
+        if math.isfinite(created) and (created <= limit * supplied or created <= ENERGY_ROUND_OFF * (e1 + contacts + damping)):
+            return None
+        return (f"the energy balance of steps {b['step']}-{self.step} does not close: the steps created {created:.6g} "
+                f"(Δ(kinetic + elastic) {e1 - e0:.6g} + dissipated {contacts + damping:.6g} - work of walls "
+                f"{walls:.6g}, gravity {gravity:.6g} and external forces {b['external']:.6g}), more than "
+                f"{limit:g} × the {supplied:.6g} the chunk started with or was given (tolerance 'energy.blow-up', "
+                f"demflow/tolerances.py): the time step is unstable. Reduce dt (now {self.dt:.4g}, safe estimate "
+                f"{self.dt_safe:.4g}, demflow.integrate.safe_time_step)")
+
+    def _blow_up(self, good, pieces, rec, rec_count, what, why=None):
         """Keep the records so far, restore the last good state ``good``, save it and raise BlowUpError;
         ``what`` names a non-finite quantity (None: the cycle stopped on its own tests, BLOWUP or NONFINITE,
-        and the state is searched for the quantity to name)."""
-        if what is None:  # name the non-finite quantity, if there is one
+        and the state is searched for the quantity to name); ``why`` (the energy balance) replaces the
+        message's reason."""
+        if what is None and why is None:  # name the non-finite quantity, if there is one
             bad = self._nonfinite_state()
             what = f"{bad} is not finite" if bad else None
         self._keep_records(pieces, rec, rec_count)
@@ -431,11 +555,11 @@ class Simulation:
         bad_step = self.step
         self._restore_state(good)
         path = self._save_last_good()
-        if what is None:
+        if why is None and what is None:
             why = (f"a contact overlapped more than {MAX_OVERLAP_RATIO:.0%} of a radius, a disc moved more than "
                    f"{MAX_STEP_RATIO:.0%} of its radius in one step, or a force became non-finite. Reduce dt (now "
-                   f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
-        else:
+                   f"{self.dt:.4g}, safe estimate {self.dt_safe:.4g}) or the loading rate")
+        elif why is None:
             why = (f"{what} (its origin may be gravity (now ({self.gx}, {self.gy})), an external or fluid force, a "
                    f"contact law or a wall's motion). Check those for NaN or infinite values, then reduce dt (now "
                    f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
@@ -488,7 +612,7 @@ class Simulation:
         pack_discs(self.discs, P)
         out = pair_outputs(m)
         pair_forces(pr.finder, pr.other, pr.hist.copy(), pr.sx, pr.sy, P, self.n, self.walls, self.law_params,
-                    self.box, self.dt, np.zeros((m, 3)), True, *out, np.inf)
+                    self.box, self.dt, np.zeros((m, 3)), True, *out, np.inf, np.zeros(m), np.zeros(m))
         fn, fs, slide, ovl, cpx, cpy = out
         on = ovl > 0
         i, j = self.finder[on], self.other[on]

@@ -107,6 +107,18 @@ def elastic_energy_perm(pairs, mat, wmat, n, law):
 
 
 @njit
+def elastic_energy_keys(finder, other, hist, mat, wmat, n, law):
+    """Energy in the contact springs [force·length] of pairs in key order with history ``hist`` (disc
+    materials ``mat`` in disc order); a pair apart has cleared history and adds nothing."""
+    e = 0.0
+    for k in range(finder.shape[0]):
+        j = other[k]
+        mb = wmat[j - n] if j >= n else mat[j]
+        e = law_energy_add(law, e, hist, k, mat[finder[k]], mb)
+    return e
+
+
+@njit
 def _gather(src, dst, perm):
     """dst[p] = src[perm[p]]: disc order to slot order."""
     for p in range(perm.shape[0]):
@@ -138,7 +150,7 @@ def _rows_from(src, dst, pos):
 
 @njit
 def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
-              rec, rec_count, ext, has_ext):
+              rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs):
     """Run up to n steps from step ``step0``.
 
     ``pub`` and ``slots`` (:class:`~demflow.state.Discs`) are the discs in disc order and in slot
@@ -163,6 +175,12 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
     With ``has_ext`` the (n, 3) array ``ext`` (disc order: fx, fy, moment) is added to every
     disc's force sums at every step (the fluid force of a saturated scene, held between fluid
     solves); a dry scene passes has_ext=False and the cycle is unchanged.
+
+    Energy accounts for the balance of :class:`~demflow.simulation.Simulation` (nothing in the
+    state reads them): ``acc`` += (energy dissipated by the contacts' dashpots and friction, by
+    global damping, work of the walls on the discs) [force·length] over the steps done, summed in
+    pair and disc order (``diss_pairs``, ``wwork_pairs`` (pairs, internal order) and ``diss_discs``
+    (discs, slot order) are scratch sums, zero on entry and on return).
     """
     perm = lay.perm
     for src, dst in ((pub.x, slots.x), (pub.y, slots.y), (pub.th, slots.th), (pub.vx, slots.vx),
@@ -173,7 +191,22 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
     _gather(pub.mat, slots.mat, perm)
     _rows_to(pairs.hist, pairs.hist_p, pairs.pos)
     done, status, disp_walls, rec_count = _cycle(n, step0, skin, disp_walls, pub.mat, slots, lay, pairs, walls,
-                                                 loading, law, box, dt, gx, gy, rec, rec_count, ext, has_ext)
+                                                 loading, law, box, dt, gx, gy, rec, rec_count, ext, has_ext, acc,
+                                                 diss_pairs, wwork_pairs, diss_discs)
+    e = 0.0
+    ew = 0.0
+    for k in range(pairs.pos.shape[0]):  # key order
+        e += diss_pairs[pairs.pos[k]]
+        ew += wwork_pairs[pairs.pos[k]]
+    diss_pairs[:] = 0.0
+    wwork_pairs[:] = 0.0
+    acc[0] += e
+    acc[2] += ew
+    e = 0.0
+    for i in range(diss_discs.shape[0]):  # disc order
+        e += diss_discs[lay.inv[i]]
+    diss_discs[:] = 0.0
+    acc[1] += e
     for src, dst in ((slots.x, pub.x), (slots.y, pub.y), (slots.th, pub.th), (slots.vx, pub.vx),
                      (slots.vy, pub.vy), (slots.om, pub.om), (slots.Fx, pub.Fx), (slots.Fy, pub.Fy),
                      (slots.M, pub.M)):
@@ -210,7 +243,7 @@ def _record(q, step, pairs, walls, slots, lay, mat, law, rec, n_keys):
 
 @njit
 def _cycle(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
-           rec, rec_count, ext, has_ext):
+           rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs):
     """The steps of :func:`run_steps` on the slot-ordered state (``mat``: materials in disc order,
     for the records' key-ordered sums)."""
     nd = slots.x.shape[0]
@@ -223,7 +256,8 @@ def _cycle(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, l
         recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
         o = pairs.out
         nbad = pair_forces(pairs.fin_p, pairs.oth_p, pairs.hist_p, pairs.sx_p, pairs.sy_p, P, nd, walls, law, box,
-                           dt, pairs.f, recording, o.fn, o.fs, o.slide, o.ovl, o.cpx, o.cpy, MAX_OVERLAP_RATIO)
+                           dt, pairs.f, recording, o.fn, o.fs, o.slide, o.ovl, o.cpx, o.cpy, MAX_OVERLAP_RATIO,
+                           diss_pairs, wwork_pairs)
         if nbad > 0:
             return s, BLOWUP, disp_walls, rec_count
         wall_sums(pairs.wall_p, pairs.oth_p, nd, pairs.f, pairs.out, walls)
@@ -232,7 +266,7 @@ def _cycle(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, l
             rec_count += 1
         set_wall_velocities(step, walls, loading)
         dmax2, jump2 = sum_and_integrate(slots, P, pairs.start_p, pairs.sidx_p, pairs.f, gx, gy, dt, ext,
-                                         lay.perm, has_ext)
+                                         lay.perm, has_ext, diss_discs)
         if jump2 > MAX_STEP_RATIO * MAX_STEP_RATIO or not np.isfinite(jump2):
             return s + 1, BLOWUP, disp_walls, rec_count
         disp_walls += move_walls(walls, dt)

@@ -324,6 +324,18 @@ TOLERANCES = {
         "the wall's frame: measured energy error 5.6e-8 (dt = 1e-5 s, contact time 0.043 s) and 1.9e-8 at dt/2; "
         "rebound 2V to 5.3e-8 face-on. 1e-6 leaves 18x; a wall velocity left out of the relative velocity gives "
         "a rebound V (error 0.5), a wrong lever arm an O(1) energy error.", absolute=True, kind="exact"),
+    "energy.blow-up": Tolerance(
+        0.25,
+        "Blow-up by energy (issue 17 item 4): a chunk blows up when the energy its steps created (Δ(kinetic + "
+        "elastic) + dissipated - work of walls, gravity and external forces; kinetic as ½m v_{n-1/2}·v_{n+1/2}) "
+        "exceeds this fraction of the energy it started with plus the work it was given. Measured in stable runs "
+        "(5 chunks each): ≤ 1.4e-14 (perturbed hexagonal packing up to 0.99× its critical Δt), ≤ 7.3e-4 (every "
+        "scene of thesis-one-disc, -five-discs, -impact, -sedimentation and cs-nine-disc), 2.9e-3 (golden box: "
+        "servo, dashpots, friction, gravity; 250-step chunks), ≤ 0.024 (one disc bouncing, sliding, shaken or "
+        "under a servo lid, 200-step chunks: the incremental normal spring's start at a contact); unstable: ≈ 98 "
+        "(hexagonal packing at 1.05× its critical Δt, first 1000 steps), ≈ 430 at 1.2×, and 0.9-6.9 "
+        "(thesis-liquefaction at its Δt, 4.4× the safe estimate). 0.25 is 10× the largest stable value and 4× "
+        "below the smallest unstable one.", kind="self-consistency"),
 }
 
 

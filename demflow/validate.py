@@ -17,8 +17,8 @@ from __future__ import annotations
 
 from .laws import FAMILIES
 from .scene import (Box, ContactModel, Discs, GlobalDamping, Material, Outputs, Scene, SceneError, Superquadrics, Wall,
-                    check_flag, check_items, check_name, check_number, check_type, check_vector, check_whole,
-                    type_phrase)
+                    check_choice, check_flag, check_items, check_name, check_number, check_type, check_vector,
+                    check_whole, type_phrase)
 
 
 def check_scene(scene) -> None:
@@ -40,6 +40,8 @@ def check_scene(scene) -> None:
         check_number("scene.dt", scene.dt, gt=0.0, unit="time")
     check_number("scene.dt_fraction", scene.dt_fraction, gt=0.0, le=1.0)
     check_flag("scene.allow_supercritical", scene.allow_supercritical)
+    check_flag("scene.allow_unsafe_dt", scene.allow_unsafe_dt)
+    check_choice("scene.energy_check", scene.energy_check, ("raise", "warn"))
     check_whole("scene.n_steps", scene.n_steps)
     if scene.skin is not None:
         check_number("scene.skin", scene.skin, gt=0.0, unit="length")

@@ -174,10 +174,16 @@ def _(pick):
     return _set(sc, n_steps=v), "scene.n_steps", v
 
 
+# The run-time-step flags and the energy check share one fault (one pick from a list as long as BAD_FLAG,
+# so that the seeded catalogue draws what it drew before they were added): each bad value goes to one field.
+_FLAG_FIELDS = ("allow_supercritical", "allow_unsafe_dt", "energy_check")
+_FLAG_FAULTS = [(_FLAG_FIELDS[k % 3], v) for k, v in enumerate(BAD_FLAG)]
+
+
 @fault("flags", "allow_supercritical")
 def _(pick):
-    v = pick(BAD_FLAG)
-    return _set(base_dry(), allow_supercritical=v), "scene.allow_supercritical", v
+    key, v = pick(_FLAG_FAULTS)
+    return _set(base_dry(), **{key: v}), f"scene.{key}", v
 
 
 @fault("neighbour list", "skin")

@@ -55,6 +55,15 @@ from .fixtures import box_walls, run_until
 from .shear_box import hinged_shear_phases
 
 SRC = "thesis §5.3, Figs 5.9-5.14"
+# Issue 17: Δt = 2.5e-3 is 4.4× the safe critical estimate (integrate.safe_time_step) because the contact
+# dashpots cN = cS = 1.5e7 are about 20× critical for a disc pair: the explicit (lagged) dashpot limit
+# c Δt/m < 2 fails for the discs' rotation, and a dry run at this Δt shows 2 of the 3 discs' ω changing
+# sign every step (period 2, capped by sliding), none at Δt/4 (measured).  The case keeps its Δt, and so
+# its results, until its owner decides; the opt-out is explicit and build warns (UnsafeTimeStepWarning).
+# The energy balance sees it too (the dashpots "dissipate" about twice the energy the discs lose): the
+# runs warn (EnergyBalanceWarning) instead of stopping.
+UNSAFE_DT = True
+ENERGY_CHECK = "warn"
 
 
 class Liquefaction(Case):
@@ -113,7 +122,8 @@ class Liquefaction(Case):
                                                           "disc"),
                      materials={"disc": Material(p["rho_s"]), "wall": Material()}, laws=self.laws(p),
                      walls=self.walls(p, W, servo=servo, top_phases=ph), dt=p["dt"], n_steps=n1,
-                     outputs=Outputs(every=1, snapshots=(n1,)), description="thesis §5.3 stage 1 (dry loading)")
+                     outputs=Outputs(every=1, snapshots=(n1,)), description="thesis §5.3 stage 1 (dry loading)",
+                     allow_unsafe_dt=UNSAFE_DT, energy_check=ENERGY_CHECK)
 
     def wet_scene(self, p, x, y, y_top, name="liquefaction-wet"):
         n2 = self.shear_steps(p)
@@ -121,6 +131,7 @@ class Liquefaction(Case):
         return Scene(name=name, discs=Discs(list(x), list(y), [p["r"]] * 3, "disc"),
                      materials={"disc": Material(p["rho_s"]), "wall": Material()}, laws=self.laws(p),
                      walls=self.walls(p, y_top, shear=True), dt=p["dt"], n_steps=n2, overlap_tolerance=0.01,
+                     allow_unsafe_dt=UNSAFE_DT, energy_check=ENERGY_CHECK,
                      outputs=Outputs(every=1, snapshots=(0, n2 // 2, n2)),
                      fluid=Fluid(viscosity=p["mu"], density=0.0, elements_per_disc=p["elements"],
                                  element_length=p["element_length"], min_gap=p["min_gap"],

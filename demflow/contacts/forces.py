@@ -20,14 +20,14 @@ import numpy as np
 from numba import prange
 
 from ..jit import njit, njit_parallel
-from ..laws.base import law_force, law_separate
+from ..laws.base import law_force_dissipation, law_separate
 from ..space import other_centre
 from .neighbours import point_segment_distance
 
 
 @njit_parallel
 def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
-                o_fn, o_fs, o_slide, o_ovl, o_cpx, o_cpy, max_overlap_ratio):
+                o_fn, o_fs, o_slide, o_ovl, o_cpx, o_cpy, max_overlap_ratio, diss, wwork):
     """Evaluate every listed pair (thesis eqs 2.7-2.20) and update its history in place.
 
     fin, oth: the pairs (other >= n: wall other - n); hist: their history rows; sx, sy: image
@@ -37,7 +37,10 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
     of :class:`~demflow.state.PairOutputs`, passed one by one (o_fn, ..., o_cpy; see
     :mod:`demflow.jit` for why): ovl, cpx, cpy for wall pairs always and for every pair when
     ``full``, fn, fs, slide only when ``full``.  Pairs not touching get zero force and lose
-    their history (contact broken).  Returns the number of pairs overlapping more than
+    their history (contact broken).  diss[k] += the energy pair k's dashpots and friction dissipated
+    in the step (:func:`demflow.laws.base.law_force_dissipation`; summed in pair order by the caller),
+    and for a wall pair wwork[k] += the work the wall's contact point (velocity v_w) did on the disc,
+    -(Fn_work v_w·ε + Fs_work v_w·τ)Δt.  Returns the number of pairs overlapping more than
     ``max_overlap_ratio`` of the smaller radius or with a non-finite force (a blow-up).
     """
     m = fin.shape[0]
@@ -110,7 +113,11 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
                 o_fs[k] = 0.0
                 o_slide[k] = 0
             continue
-        Fn, Fs, sliding = law_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt)
+        Fn, Fs, sliding, dissipated, Fn_work, Fs_work = law_force_dissipation(law, hist, k, ma, mb, overlap, ndot,
+                                                                              sdot, dt)
+        diss[k] += dissipated
+        if j >= n:
+            wwork[k] -= (Fn_work * (wvqx * ex + wvqy * ey) + Fs_work * (wvqx * tx + wvqy * ty)) * dt
         f[k, 0] = -Fn * ex - Fs * tx
         f[k, 1] = -Fn * ey - Fs * ty
         f[k, 2] = Fs

@@ -9,7 +9,9 @@ A law family (linear, Hertz-Mindlin, ...) has two halves.
   (n_materials × n_materials) tables plus mode flags — the only thing that enters a kernel;
 - ``history_width(dim)``: the per-contact history columns it keeps in ``dim`` dimensions;
 - ``stiffness_bound(law)``: the largest contact stiffness [force/length] of one declared law, for
-  the critical time step;
+  the single-spring critical time step (the base of ``dt_fraction``);
+- ``time_step_constants(law)``: its normal and tangential springs and dashpots, for the safe
+  critical time step of a packing (:func:`demflow.integrate.safe_time_step`);
 - ``elastic_energy``: compiled, see :func:`law_energy_add`;
 - ``continue_from(hist, width)``: how history written by another stage (possibly another law or
   width) carries over;
@@ -23,6 +25,9 @@ inlined into the pair pass and is a pure function of scalars and the contact's h
 
 - ``law_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt) -> (Fn, Fs, sliding)``: advance
   contact k's history row by one step and return its total normal and shear force;
+- ``law_force_dissipation(...) -> (Fn, Fs, sliding, dissipated, Fn_work, Fs_work)``: the same, plus
+  the energy its dashpots and friction dissipated in the step and the forces that worked over it (the
+  energy balance of :mod:`demflow.simulation`);
 - ``law_separate(law, hist, k)``: the pair is apart: clear its history;
 - ``law_energy_add(law, e, hist, k, ma, mb) -> e``: add the energy stored in contact k's springs.
 
@@ -37,6 +42,16 @@ import numpy as np
 
 def law_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
     """Advance contact k by one step; returns (Fn, Fs, sliding).  Compiled per law (overload)."""
+    raise NotImplementedError(f"no compiled law for parameters of type {type(law).__name__}")
+
+
+def law_force_dissipation(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
+    """:func:`law_force` plus, for the energy balance, the energy the contact dissipated in this step
+    [force·length] (its dashpots and its friction slip) and the normal and shear forces that did work
+    over the step (Fn_work, Fs_work: the work of a relative displacement d is Fn_work·dₙ + Fs_work·dₛ,
+    so that a moving wall's work is counted with the forces its move produced); returns
+    (Fn, Fs, sliding, dissipated, Fn_work, Fs_work), Fn, Fs and the history exactly as :func:`law_force`
+    gives them.  Compiled per law (overload)."""
     raise NotImplementedError(f"no compiled law for parameters of type {type(law).__name__}")
 
 
@@ -79,6 +94,13 @@ class LawFamily:
         raise NotImplementedError
 
     def stiffness_bound(self, law) -> float:
+        raise NotImplementedError
+
+    def time_step_constants(self, law) -> tuple[float, float, float, float]:
+        """(kN, kT, cN, cT) of one declared law for the safe critical time step
+        (:func:`demflow.integrate.safe_time_step`): the largest normal and tangential spring
+        stiffness [force/length] and dashpots [force·time/length] a contact can show, kT = cT = 0
+        when the tangential force can never be elastic."""
         raise NotImplementedError
 
     def continue_from(self, hist: np.ndarray, width: int) -> np.ndarray:

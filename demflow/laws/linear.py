@@ -16,7 +16,8 @@ import numpy as np
 from numba.extending import overload
 
 from ..jit import njit
-from .base import LawFamily, is_params_of, law_energy3, law_energy_add, law_force, law_force3, law_separate
+from .base import (LawFamily, is_params_of, law_energy3, law_energy_add, law_force, law_force3, law_force_dissipation,
+                   law_separate)
 
 NORMAL_INCREMENTAL = 0  # N += kN ṅ Δt (thesis eqs 2.11, 2.13, 2.15)
 NORMAL_OVERLAP = 1  # N = kN δ (YADE / LIGGGHTS)
@@ -94,6 +95,38 @@ def _linear_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
         if has_shear:
             hist[k, 1] = S
         return Fn, Fs, sliding
+    return impl
+
+
+@overload(law_force_dissipation, inline="always")
+def _linear_force_dissipation(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
+    """The linear law with the energy dissipated in the step: the dashpots' (Fn - N)ṅΔt + (Fs - S)ṡΔt
+    (cN ṅ²Δt and cS ṡ²Δt, or the part a no-tension cut leaves), and while sliding the Coulomb slip
+    work |S|·|S_trial - S|/kS, S_trial the shear spring before the cap; and the forces that worked over
+    the step, ½(N_old + N) + (Fn - N) and ½(S_old + S) + (Fs - S) (the springs store exactly their
+    mean times the increment)."""
+    if not is_params_of(law, LinearParams):
+        return None
+
+    def impl(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
+        has_shear = law.has_shear
+        s_old = hist[k, 1] if has_shear else 0.0
+        hist_n_old = hist[k, 0]
+        ks = law.ks[ma, mb]
+        N, S, Fn, Fs, sliding = linear_contact(
+            overlap, ndot, sdot, hist_n_old, s_old, dt,
+            law.kn[ma, mb], ks, law.cn[ma, mb], law.cs[ma, mb], law.mu[ma, mb], law.coh[ma, mb],
+            law.normal_mode, law.sliding_mode, has_shear)
+        hist[k, 0] = N
+        if has_shear:
+            hist[k, 1] = S
+        dissipated = ((Fn - N) * ndot + (Fs - S) * sdot) * dt
+        if sliding and ks > 0.0:
+            dissipated += abs(S) * abs(s_old + ks * sdot * dt - S) / ks
+        # the forces that did work over the step: the springs' mean and the dashpots'
+        Fn_work = 0.5 * (hist_n_old + N) + (Fn - N)
+        Fs_work = 0.5 * (s_old + S) + (Fs - S)
+        return Fn, Fs, sliding, dissipated, Fn_work, Fs_work
     return impl
 
 
@@ -229,3 +262,9 @@ class Linear(LawFamily):
 
     def stiffness_bound(self, law) -> float:
         return max(law.kn, law.ks)
+
+    def time_step_constants(self, law) -> tuple[float, float, float, float]:
+        """(kN, kS, cN, cS); a shear spring without friction or cohesion always slides (its cap
+        μFn + c is 0), so it adds no stiffness and no dashpot."""
+        sticks = law.ks > 0 and (law.friction > 0 or law.cohesion > 0)
+        return (float(law.kn), float(law.ks) if sticks else 0.0, float(law.cn), float(law.cs) if sticks else 0.0)

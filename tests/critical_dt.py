@@ -1,0 +1,132 @@
+"""Packings whose true critical time step is measured, not estimated (issue 17 items 3 and 4).
+
+A packing is pre-compressed (every contact overlaps, ``normal="overlap"`` so that the normal
+springs carry their force from the first step), in static equilibrium under its normal forces,
+in a periodic box (no walls); friction keeps every shear spring elastic.  A tiny random velocity
+and spin excite every mode; :func:`is_unstable` runs it and says whether the kinetic energy grew,
+:func:`measured_critical_dt` bisects on Δt.  Nothing here reads demflow's estimate.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from demflow import Box, ContactModel, Discs, LinearLaw, Material, Outputs, Scene, build
+
+KN = 1e5
+DENSITY = 1.0
+PERTURBATION = 1e-4  # velocity scale [length/time]: displacements ~1e-6 R, far inside the linear range
+GROWTH = 100.0  # unstable: the kinetic energy ends above GROWTH × its start (a stable run stays within ~2×)
+
+
+def hexagonal(nx: int = 6, ny: int = 6, radius: float = 1.0, overlap: float = 0.01):
+    """Equal discs on a hexagonal lattice filling a periodic box, each touching six, with contact
+    overlap ``overlap`` × R; by symmetry every disc is in equilibrium.  Returns x, y, r, (lx, ly)."""
+    d = 2.0 * radius - overlap * radius
+    h = d * math.sqrt(3.0) / 2.0
+    x, y = [], []
+    for j in range(ny):
+        for i in range(nx):
+            x.append((i + 0.5 * (j % 2) + 0.25) * d)
+            y.append((j + 0.5) * h)
+    return np.array(x), np.array(y), np.full(nx * ny, radius), (nx * d, ny * h)
+
+
+def random_dense(n: int = 64, seed: int = 1, rmin: float = 0.8, rmax: float = 1.2, fraction: float = 0.88,
+                 tol: float = 1e-9):
+    """Polydisperse discs (radii uniform in [rmin, rmax]) jammed in a square periodic box at area
+    fraction ``fraction`` (above jamming, ~0.84): random centres, then the harmonic overlap energy
+    Σ ½ δ² minimised by FIRE (Bitzek et al. 2006) until the largest net force is below ``tol`` × the
+    mean overlap force.  Returns x, y, r, (L, L)."""
+    rng = np.random.default_rng(seed)
+    r = rng.uniform(rmin, rmax, n)
+    L = math.sqrt(np.pi * np.sum(r * r) / fraction)
+    pos = rng.uniform(0.0, L, (n, 2))
+    rs = r[:, None] + r[None, :]
+
+    def forces(p):
+        d = p[:, None, :] - p[None, :, :]
+        d -= L * np.round(d / L)
+        dist = np.sqrt((d ** 2).sum(-1))
+        np.fill_diagonal(dist, np.inf)
+        ov = np.clip(rs - dist, 0.0, None)
+        f = (ov / dist)[:, :, None] * d  # repulsion along the centre line, spring constant 1
+        return f.sum(1), ov
+
+    v = np.zeros_like(pos)
+    dt, alpha, n_pos = 0.05, 0.1, 0
+    for _ in range(200_000):
+        f, ov = forces(pos)
+        mean = ov[ov > 0].mean() if np.any(ov > 0) else 1.0
+        if np.abs(f).max() < tol * mean:
+            break
+        P = (f * v).sum()
+        if P > 0:
+            v = (1 - alpha) * v + alpha * np.linalg.norm(v) * f / np.linalg.norm(f)
+            n_pos += 1
+            if n_pos > 5:
+                dt, alpha = min(dt * 1.1, 0.2), alpha * 0.99
+        else:
+            v[:] = 0.0
+            dt, alpha, n_pos = dt * 0.5, 0.1, 0
+        v += f * dt
+        pos = (pos + v * dt) % L
+    else:
+        raise RuntimeError("random_dense: FIRE did not converge")
+    return pos[:, 0], pos[:, 1], r, (L, L)
+
+
+def scene(packing, dt: float, *, ks: float = KN, friction: float = 0.5, cn: float = 0.0, cs: float = 0.0,
+          seed: int = 3, n_steps: int = 3000, name: str = "packing") -> Scene:
+    """The packing with the linear law (kN = KN, kS = ``ks``), perturbed by random velocities and
+    spins of scale PERTURBATION, stepped at ``dt``; build checks skipped (allow_supercritical)."""
+    x, y, r, (lx, ly) = packing
+    rng = np.random.default_rng(seed)
+    v = PERTURBATION * rng.normal(size=(len(x), 2))
+    om = PERTURBATION * rng.normal(size=len(x)) / r
+    law = LinearLaw(kn=KN, ks=ks, cn=cn, cs=cs, friction=friction)
+    return Scene(name=name, discs=Discs(x=x, y=y, radius=r, material="g", velocity=v, angular_velocity=om),
+                 materials={"g": Material(density=DENSITY)}, laws={("g", "g"): law},
+                 contact_model=ContactModel(normal="overlap"), box=Box(periodic_x=(0.0, lx), periodic_y=(0.0, ly)),
+                 dt=dt, n_steps=n_steps, allow_supercritical=True, overlap_tolerance=0.1, skin=0.2,
+                 outputs=Outputs(every=0))
+
+
+def kinetic(sim) -> float:
+    return float(0.5 * np.sum(sim.mass * (sim.vx ** 2 + sim.vy ** 2) + sim.inertia * sim.om ** 2))
+
+
+def is_unstable(packing, dt: float, n_steps: int = 3000, **kw) -> bool:
+    """True when the kinetic energy grows beyond GROWTH × its start within ``n_steps`` steps (or the run
+    stops with BlowUpError or non-finite values)."""
+    import warnings
+
+    from demflow import BlowUpError
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim = build(scene(packing, dt, n_steps=n_steps, **kw))
+    e0 = kinetic(sim)
+    chunk = 250  # stop as soon as it has grown: an unstable run soon moves discs far (slow neighbour rebuilds)
+    for _ in range(0, n_steps, chunk):
+        try:
+            sim.run(chunk)
+        except BlowUpError:
+            return True
+        e1 = kinetic(sim)
+        if not (math.isfinite(e1) and e1 < GROWTH * e0):
+            return True
+    return False
+
+
+def measured_critical_dt(packing, lo: float, hi: float, rel: float = 2e-3, **kw) -> float:
+    """The largest stable Δt, bisected between a stable ``lo`` and an unstable ``hi`` to ``rel``."""
+    assert not is_unstable(packing, lo, **kw) and is_unstable(packing, hi, **kw), (lo, hi)
+    while hi - lo > rel * lo:
+        mid = 0.5 * (lo + hi)
+        if is_unstable(packing, mid, **kw):
+            hi = mid
+        else:
+            lo = mid
+    return lo
