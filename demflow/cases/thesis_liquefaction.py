@@ -71,6 +71,12 @@ class Liquefaction(Case):
     title = "Artificial liquefaction of a three-disc column under constant-volume shear (thesis §5.3)"
     source = SRC
     assumptions = (
+        "NUMERICAL WARNING (issue 17, measured): the stated Δt with the stated dashpots is 4.4× the safe critical "
+        "time step (demflow.integrate.safe_time_step): the lagged dashpots are about 20× critical for the discs' "
+        "rotation, and a dry run at this Δt shows 2 of the 3 discs' angular velocity changing sign every step "
+        "(period 2, capped by sliding), none at Δt/4; the energy balance warns (the dashpots 'dissipate' about "
+        "twice the energy the discs lose). The case keeps the thesis's Δt (its checks concern the pore pressure "
+        "and the broken contacts); rerun with --set dt=6.25e-4 to see the stable step's results.",
         "Disc density 2000 M/L² (= m/πr² with the stated m = 157080 M), not the stated 2400 (which gives m = 188496).",
         "cN = cS = 1.5e7 F·T/L as stated; with kN = 0.75e9 and m = 157080 this is 69 % of critical damping "
         "c/(2√(k m)), not the '≈ 5 %' of the text (5 % would be c ≈ 1.09e6).",
