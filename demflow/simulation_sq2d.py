@@ -38,7 +38,7 @@ from .contacts.neighbours import pairs_cell_search, transfer_history
 from .integrate import critical_time_step
 from .jit import njit
 from .laws.linear import linear_contact
-from .scene import SceneError
+from .scene import SceneError, type_phrase
 from .shapes import superquadric as sq
 from .walls import move_walls, set_wall_velocities
 
@@ -275,9 +275,11 @@ def _refuse_unsupported(scene) -> None:
     if scene.box.periodic:
         raise SceneError(f"scene.box={scene.box!r} is periodic; superquadrics run in an open box so far: give "
                          "Box() or use Discs")
-    if scene.outputs.track_pairs or len(scene.outputs.snapshots):
-        raise SceneError("scene.outputs.track_pairs/snapshots are not recorded for Superquadrics yet; leave them "
-                         "empty (sim.contacts() gives the contacts at any time)")
+    for key in ("track_pairs", "snapshots"):
+        v = getattr(scene.outputs, key)
+        if len(v):
+            raise SceneError(f"scene.outputs.{key}={v!r}: {key} are not recorded for Superquadrics yet; give "
+                             f"scene.outputs.{key}=() (sim.contacts() gives the contacts at any time)")
 
 
 def build_superquadrics(scene):
@@ -301,16 +303,21 @@ def build_superquadrics(scene):
     if isinstance(p.material, str):
         mats = [p.material] * nb
     else:
+        if not isinstance(p.material, (list, tuple, np.ndarray)):
+            raise SceneError(f"scene.discs.material={p.material!r} is {type_phrase(p.material)}; give one material "
+                             "name or a list of names, one per particle")
         mats = list(p.material)
         if len(mats) != nb:
             raise SceneError(f"scene.discs.material has {len(mats)} entries for {nb} particles; give one per particle "
                              "or one name")
     for k, m in enumerate(mats):
         if not (isinstance(m, str) and m in scene.materials):
-            raise SceneError(f"scene.discs.material[{k}]={m!r} is not declared; add it to scene.materials "
-                             f"(declared: {sorted(scene.materials)})")
+            where = "scene.discs.material" + ("" if isinstance(p.material, str) else f"[{k}]")
+            raise SceneError(f"{where}={m!r}: particle {k} uses material {m!r}, which the scene does not declare; "
+                             f"add it to scene.materials (declared: {sorted(scene.materials)})")
     rb = np.array([sq.bounding_radius(a[k], b[k], nexp[k]) for k in range(nb)])
-    props = [sq.mass_properties(a[k], b[k], nexp[k], float(scene.materials[mats[k]].density)) for k in range(nb)]
+    with np.errstate(over="ignore"):  # an overflow is refused below, naming the semi-axes
+        props = [sq.mass_properties(a[k], b[k], nexp[k], float(scene.materials[mats[k]].density)) for k in range(nb)]
     mass = np.array([m for m, _ in props], dtype=np.float64)
     inertia = np.array([i for _, i in props], dtype=np.float64)
     if p.mass is not None:
@@ -326,6 +333,13 @@ def build_superquadrics(scene):
         k = int(bad[0])
         raise SceneError(f"scene.materials[{mats[k]!r}].density gives particle {k} the mass {mass[k]}; give the "
                          "material a density > 0 or give scene.discs.mass")
+    bad = np.flatnonzero(~(np.isfinite(mass) & np.isfinite(inertia) & (inertia > 0)))
+    if bad.size:
+        k = int(bad[0])
+        raise SceneError(f"scene.discs.a[{k}]={a[k]:g}, scene.discs.b[{k}]={b[k]:g} (n={nexp[k]:g}) with "
+                         f"scene.materials[{mats[k]!r}].density={scene.materials[mats[k]].density!r}: particle {k}'s "
+                         f"mass {mass[k]:g} or moment of inertia {inertia[k]:g} is not finite and > 0; give smaller "
+                         "semi-axes, density or mass (or rescale the units)")
     v = _velocities(p.velocity, nb) if p.velocity is not None else np.zeros((nb, 2))
     om = _as_array("angular_velocity", p.angular_velocity, nb) if p.angular_velocity is not None else np.zeros(nb)
 
