@@ -60,6 +60,10 @@ SQBodies = namedtuple("SQBodies", [
     "Fx", "Fy", "M",         # contact force and moment sums of the last step
 ])
 
+# the dynamic state of the bodies and walls (checkpoints, the last good state)
+_SQ_STATE = ("x", "y", "th", "vx", "vy", "om", "xref", "yref", "Fx", "Fy", "M")
+_SQ_WALL_STATE = ("px", "py", "ex", "ey", "vx", "vy", "om", "cx", "cy", "force")
+
 SQPairOut = namedtuple("SQPairOut", [
     "ovl",         # overlap δ [length] (eq 42; <= 0 apart)
     "fn", "fs",    # total normal and shear force [force]
@@ -461,33 +465,154 @@ class SuperquadricSimulation:
                                  "raise scene.overlap_tolerance")
         self.hist[:, 2:] = hist[:, 2:]  # keep the warm starts found
 
-    def run(self, n_steps: int | None = None) -> "SuperquadricSimulation":
-        """Advance ``n_steps`` (default scene.n_steps) steps."""
-        from .simulation import BlowUpError
+    CHUNK = 20000  # steps between last-good-state copies (as the disc cycle)
 
-        n_steps = int(self.scene.n_steps if n_steps is None else n_steps)
+    def run(self, n_steps: int | None = None) -> "SuperquadricSimulation":
+        """Advance ``n_steps`` (default scene.n_steps) steps.  A blow-up (an overlap or a step beyond
+        half the smaller semi-axis, a non-finite force, or any non-finite body or wall quantity on return
+        from the compiled cycle: a NaN gravity, mass or law output, a wall driven to infinity) raises
+        :class:`~demflow.simulation.BlowUpError` after restoring and saving the last good state (the
+        start of the chunk, at most ``CHUNK`` steps back; :meth:`load_checkpoint` reads it)."""
+        from .scene import check_whole
+
+        n_steps = check_whole("run(n_steps)", self.scene.n_steps if n_steps is None else n_steps)
         every = int(self.scene.outputs.every)
         rows = (self.step + n_steps - 1) // every - (self.step - 1) // every if every > 0 and n_steps > 0 else 0
         rec = np.zeros((rows, 3))
         rec_count = 0
         if self.n and self.finder.shape[0] == 0 and self.rebuilds == 0:
             self.rebuild()
-        left = n_steps
-        while left > 0:
-            done, status, self.disp_walls, rec_count = run_sq_steps(
-                left, self.step, self.skin, self.disp_walls, self.bodies, self.finder, self.other, self.hist,
-                self.out, self.walls, self.loading, self.law_params, self.knobs, self.dt, self.gx, self.gy, every,
-                rec, rec_count, self.counters)
-            self.step += done
-            left -= done
-            if status == BLOWUP:
-                self.energy_records = np.vstack([self.energy_records, rec[:rec_count]])
-                raise BlowUpError(f"superquadric run blew up at step {self.step} (an overlap beyond "
-                                  f"{MAX_OVERLAP_RATIO} of a semi-axis, a non-finite force or a step beyond "
-                                  f"{MAX_STEP_RATIO} of a semi-axis); reduce dt", None)
-            if status == REBUILD:
-                self.rebuild()
+        target = self.step + n_steps
+        changes = sorted({int(st) for w in self.scene.walls if w.servo is not None for st, _ in w.servo.schedule})
+        while self.step < target:
+            self._set_servo_targets()
+            nxt = [c for c in changes if c > self.step]
+            stop = min(target, self.step + self.CHUNK, nxt[0] if nxt else target)
+            good = self._copy_state()
+            while self.step < stop:
+                done, status, self.disp_walls, rec_count = run_sq_steps(
+                    stop - self.step, self.step, self.skin, self.disp_walls, self.bodies, self.finder, self.other,
+                    self.hist, self.out, self.walls, self.loading, self.law_params, self.knobs, self.dt, self.gx,
+                    self.gy, every, rec, rec_count, self.counters)
+                self.step += done
+                # the cycle's own tests see overlaps, steps and forces; one O(n) pass per call sees a NaN or
+                # inf no contact met (a body in free flight under a NaN gravity, a wall driven to infinity)
+                bad = self._nonfinite_state()
+                if status == BLOWUP or bad is not None:
+                    self.energy_records = np.vstack([self.energy_records, rec[:rec_count]])
+                    self._blow_up(good, bad)
+                if status == REBUILD:
+                    self.rebuild()
         self.energy_records = np.vstack([self.energy_records, rec[:rec_count]])
+        return self
+
+    def _set_servo_targets(self) -> None:
+        """Servo targets in effect at the current step (Servo.schedule), as the disc cycle."""
+        for w, wall in enumerate(self.scene.walls):
+            if wall.servo is not None:
+                self.loading.servo_F[w] = wall.servo.force_at(self.step)
+
+    def _nonfinite_state(self) -> str | None:
+        """The first non-finite quantity of the bodies, the walls or the contact history, or None."""
+        from .simulation import first_nonfinite
+
+        bd, w = self.bodies, self.walls
+        return first_nonfinite({
+            **{f"bodies.{k}": getattr(bd, k) for k in ("x", "y", "th", "vx", "vy", "om", "Fx", "Fy", "M")},
+            **{f"walls.{k}": getattr(w, k) for k in ("px", "py", "ex", "ey", "vx", "vy", "om", "cx", "cy", "force")},
+            "pairs.hist": self.hist})
+
+    def _blow_up(self, good: dict, bad: str | None):
+        """Restore the last good state ``good``, save it and raise BlowUpError naming the non-finite
+        quantity ``bad`` (None: the cycle's overlap, step or force test stopped it)."""
+        from .simulation import BlowUpError
+
+        bad_step = self.step
+        if bad is not None:
+            why = (f"{bad} is not finite (its origin may be gravity (now ({self.gx}, {self.gy})), a mass, a contact "
+                   f"law or a wall's motion). Check those for NaN or infinite values, then reduce dt (now "
+                   f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
+        else:
+            why = (f"an overlap beyond {MAX_OVERLAP_RATIO:.0%} of a semi-axis, a non-finite force or a step beyond "
+                   f"{MAX_STEP_RATIO:.0%} of a semi-axis. Reduce dt (now {self.dt:.4g}, critical estimate "
+                   f"{self.dt_crit:.4g}) or the loading rate")
+        self._restore_state(good)
+        path = self._save_last_good()
+        raise BlowUpError(f"scene {self.scene.name!r} (superquadrics) blew up at step {bad_step}: {why}. Last good "
+                          f"state (step {self.step}) saved to {path}", path)
+
+    # ------------------------------------------------------------------ state I/O
+    def _state_arrays(self) -> dict:
+        """The dynamic state by name (the arrays themselves): bodies, walls, the pair list with its history
+        (kept as it is, so that a run resumed from it is the uninterrupted run to the bit)."""
+        bd, w = self.bodies, self.walls
+        out = {k: getattr(bd, k) for k in _SQ_STATE}
+        out.update({f"wall_{k}": getattr(w, k) for k in _SQ_WALL_STATE})
+        out.update(finder=self.finder, other=self.other, hist=self.hist,
+                   scalars=np.array([self.disp_walls, float(self.rebuilds)]))
+        return out
+
+    def _set_state(self, s: dict) -> None:
+        bd, w = self.bodies, self.walls
+        for k in _SQ_STATE:
+            getattr(bd, k)[:] = s[k]
+        for k in _SQ_WALL_STATE:
+            getattr(w, k)[:] = s[f"wall_{k}"]
+        self.finder = np.array(s["finder"], np.int64)
+        self.other = np.array(s["other"], np.int64)
+        self.hist = np.array(s["hist"], np.float64).reshape(-1, HIST)
+        self.out = self._outputs(self.finder.shape[0])
+        self.disp_walls = float(s["scalars"][0])
+        self.rebuilds = int(s["scalars"][1])
+
+    def _copy_state(self) -> dict:
+        return {k: np.array(v, copy=True) for k, v in self._state_arrays().items()} | {"step": self.step}
+
+    def _restore_state(self, s: dict) -> None:
+        self.step = s["step"]
+        self._set_state(s)
+
+    def _save_last_good(self) -> str:
+        import os
+        import tempfile
+        from pathlib import Path
+
+        out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
+        path = out / f"{self.scene.name}-last-good-step{self.step}.npz"
+        self.save_checkpoint(path)
+        return str(path)
+
+    def save_checkpoint(self, path) -> "Path":
+        """Write the dynamic state to ``path`` (.npz) atomically (temporary file + rename)."""
+        import json
+        import os
+        import tempfile
+        from pathlib import Path
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        meta = dict(scene=self.scene.name, family="superquadrics", step=self.step, n=self.n, nw=self.nw, dt=self.dt)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
+        os.close(fd)
+        with open(tmp, "wb") as fh:
+            np.savez(fh, meta=json.dumps(meta), **self._state_arrays())
+        os.replace(tmp, path)
+        return path
+
+    def load_checkpoint(self, path) -> "SuperquadricSimulation":
+        """Restore a state written by :meth:`save_checkpoint` (or saved on a blow-up) for the same scene."""
+        import json
+
+        with np.load(path) as z:
+            meta = json.loads(str(z["meta"]))
+            if (meta.get("family") != "superquadrics" or meta["scene"] != self.scene.name or meta["n"] != self.n
+                    or meta["nw"] != self.nw):
+                raise ValueError(f"checkpoint {path} is for scene {meta['scene']!r} ({meta.get('family', 'discs')}, "
+                                 f"{meta['n']} particles, {meta['nw']} walls), not {self.scene.name!r} (superquadrics, "
+                                 f"{self.n}, {self.nw}); build the same scene")
+            state = {k: z[k].copy() for k in z.files if k != "meta"}
+        self.step = int(meta["step"])
+        self._set_state(state)
         return self
 
     def kinetic_energy(self) -> float:
