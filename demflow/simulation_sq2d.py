@@ -293,6 +293,8 @@ def build_superquadrics(scene):
     from .laws.restitution import zeta_linear
     from .simulation import walls_and_loading
 
+    from .simulation import check_run_length
+
     _refuse_unsupported(scene)
     p = scene.discs
     x = _as_array("x", p.x)
@@ -348,6 +350,7 @@ def build_superquadrics(scene):
     om = _as_array("angular_velocity", p.angular_velocity, nb) if p.angular_velocity is not None else np.zeros(nb)
 
     wall_geo = wall_geometry(scene)
+    check_run_length("scene.n_steps", int(scene.n_steps), scene, nb, len(scene.walls), 0)
     mat_names, mid, used, law, k_max = material_laws(scene, mats)
     if law.name != "linear":
         raise SceneError(f"scene.laws: the {law.name} law is not available for Superquadrics yet; give LinearLaw "
@@ -475,7 +478,10 @@ class SuperquadricSimulation:
         start of the chunk, at most ``CHUNK`` steps back; :meth:`load_checkpoint` reads it)."""
         from .scene import check_whole
 
+        from .simulation import check_run_length
+
         n_steps = check_whole("run(n_steps)", self.scene.n_steps if n_steps is None else n_steps)
+        check_run_length("run(n_steps)", n_steps, self.scene, self.n, self.nw, 0, self.step)  # records fit
         every = int(self.scene.outputs.every)
         rows = (self.step + n_steps - 1) // every - (self.step - 1) // every if every > 0 and n_steps > 0 else 0
         rec = np.zeros((rows, 3))

@@ -781,8 +781,11 @@ def _(pick):
 
 @fault("superquadrics", "superquadric scene unsupported or overlapping")
 def _(pick):
-    kind = pick(["overlap", "fluid", "box", "track_pairs", "snapshots", "family"])
+    kind = pick(["overlap", "fluid", "box", "track_pairs", "snapshots", "family", "n_steps"])
     sc = base_superquadric()
+    if kind == "n_steps":  # records beyond what can be stored
+        v = pick([10 ** 12, 10 ** 15, 2 ** 62])
+        return _set(sc, n_steps=v, outputs=Outputs(every=1)), "scene.n_steps", v
     if kind == "overlap":
         d = pick([0.5, 1.0, 1.5])
         return _sq(sc, x=[0.0, d, 6.0]), "scene.discs", d
