@@ -53,8 +53,12 @@ def _scenes(s: dict, before: dict | None, title: str = "Invalid scenes",
             f"the broken field</b>; {_counts(o, keys[1:]) or 'none unnamed, accepted or crashed'}.")
     if before:
         b = before["outcomes"]
-        text += (f" The same {before['n']} scenes on the code before issue 19: {_counts(b, keys)} (clear: a "
-                 "SceneError whose message names the field's path; that code named no paths).")
+        same = before.get("catalogue") == s["catalogue"] and before.get("seed") == s["seed"]
+        text += (f" The {'same ' if same else ''}{before['n']} scenes on the code before issue 19"
+                 + ("" if same else f" (drawn from the catalogue as it was then: {len(before['catalogue'])} kinds of "
+                    f"fault, not this run's {len(s['catalogue'])})")
+                 + f": {_counts(b, keys)} (clear: a SceneError whose message names the field's path; that code named "
+                 "no paths).")
     text += ("</p><p>Outcomes: <i>clear</i> a SceneError whose message contains the dotted path of the broken "
              "field (e.g. <code>scene.walls[2].servo.v_max</code>), with the value, the rule and the fix; "
              "<i>unnamed</i> a SceneError that does not name it; <i>accepted</i> built without complaint; "
