@@ -96,7 +96,8 @@ def main(argv=None):
     wall = time.perf_counter() - t0
     import demflow
 
-    out = dict(kind="scenes3d" if three_d else "scenes", generated=time.strftime("%Y-%m-%d %H:%M:%S"), python=platform.python_version(),
+    out = dict(kind="scenes3d" if three_d else "scenes", generated=time.strftime("%Y-%m-%d %H:%M:%S"),
+               python=platform.python_version(),
                code=str(Path(demflow.__file__).resolve().parents[1]), n=args.n, seed=args.seed,
                wall_time_s=round(wall, 2), outcomes=dict(outcomes), clear_fraction=outcomes["clear"] / args.n,
                categories={c: dict(v) for c, v in sorted(per_cat.items())},
