@@ -197,6 +197,77 @@ def _walls(scene, walls, index):
     return planes, tris, loading
 
 
+def _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies) -> float:
+    """The packing's safe critical time step (:func:`demflow.integrate.safe_time_step_3d`) [time], for the
+    sphere pairs that can meet and every sphere against every wall.  A clump member moves with its clump:
+    at its surface a unit force meets the mobility 1/M + ρ²/I of the rigid body (ρ its distance from the
+    body's centre, here bounded by |offset| + R, I the smallest principal moment), in every direction, so
+    it counts with mass 1/(1/M + ρ²/I_min) and no rotation of its own."""
+    from .integrate import safe_time_step_3d
+
+    m_dash = mass  # the masses the contact dashpots use (a member: its clump's)
+    mass = mass.astype(np.float64, copy=True)
+    inertia = 0.4 * mass * r * r
+    members = body >= 0
+    if np.any(members):
+        b = body[members]
+        rho = np.linalg.norm(bodies.offset, axis=1) + r[members]
+        mass[members] = 1.0 / (1.0 / bodies.mass[b] + rho ** 2 / bodies.moments[b].min(axis=1))
+        inertia[members] = np.inf
+
+    used = sorted(set(mats))
+    big = {a: (float(r[mat == index[a]].max()), float(m_dash[mat == index[a]].max())) for a in used}
+
+    def constants(law, a, b, wall=False):
+        if isinstance(family, HertzMindlin):
+            r_b, m_b = (math.inf, math.inf) if wall else big[b]
+            f = family.time_step_law(law, a, b, float(scene.max_overlap), r_b, m_b)
+            return lambda sel: f(r[sel], m_dash[sel])
+        return family.time_step_constants(law)
+
+    pair_laws = {}
+    for (a, b), law in family.laws_by_pair.items():
+        if a in used and b in used:
+            pair_laws[(index[a], index[b])] = constants(law, a, b)
+            pair_laws[(index[b], index[a])] = constants(law, b, a)
+    wall_laws = {}
+    for a in used:
+        for w in walls:
+            wall_laws.setdefault(index[a], []).append(constants(scene.law_for(a, w.material), a, w.material, True))
+    # the spheres and walls each can meet: every sphere but itself and its own clump's members
+    own = np.ones(len(r))
+    if np.any(members):
+        _, inv, counts = np.unique(body[members], return_inverse=True, return_counts=True)
+        own[members] = counts[inv]
+    partners = len(r) - own + len(walls)
+    if scene.max_contacts is not None:
+        partners = np.minimum(partners, scene.max_contacts)
+    return float(safe_time_step_3d(r, mass, mat, pair_laws, wall_laws, partners=partners, inertia=inertia)["dt"])
+
+
+def _check_safe_step(scene, dt: float, dt_safe: float) -> None:
+    """Refuse a step above the safe estimate (warn with allow_unsafe_dt; allow_supercritical accepts it)."""
+    if dt <= dt_safe or scene.allow_supercritical:
+        return
+    field = f"scene.dt={dt:.6g}" if scene.dt is not None else (f"scene.dt_fraction={scene.dt_fraction:g} gives "
+                                                               f"dt={dt:.6g}, which")
+    what = (f"{field} is above the safe critical time step {dt_safe:.6g} of a packing of these spheres "
+            f"(demflow.integrate.safe_time_step_3d: every sphere with as many neighbours as can touch it, rotations "
+            f"coupled by the tangential springs, dashpots, Hertzian stiffness at overlaps up to "
+            f"scene.max_overlap={scene.max_overlap:g} of the smaller radius)")
+    if scene.allow_unsafe_dt:
+        import warnings
+
+        from .scene import UnsafeTimeStepWarning
+
+        warnings.warn(f"scene {scene.name!r}: {what}; run anyway (allow_unsafe_dt=True)", UnsafeTimeStepWarning,
+                      stacklevel=3)
+        return
+    raise SceneError(f"{what}; give dt <= {dt_safe:.6g} (or a smaller dt_fraction), declare a smaller "
+                     "scene.max_overlap if the contacts stay shallower, or set allow_unsafe_dt=True to run it "
+                     "with a warning")
+
+
 def _skin_and_box(scene, r):
     """The neighbour-list skin and the Box3, refusing periods shorter than twice the reach (``r``:
     the particles' (bounding) radii)."""
@@ -314,6 +385,8 @@ def build3d(scene: Scene3D) -> Simulation3D:
             raise SceneError(f"scene.dt={dt:.6g} exceeds the critical estimate {dt_crit:.6g} ({how}); give a "
                              "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
                              "allow_supercritical=True")
+    dt_safe = _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies)
+    _check_safe_step(scene, dt, dt_safe)
     d = scene.damping
     P = np.zeros((n, 16))
     P[:, 9] = r
@@ -324,7 +397,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
                   inertia=inertia, inv_r2=1.0 / r ** 2, mat=mat, fixed=fixed, body=body, FM=np.zeros((n, 6)), P=P,
                   ref=np.zeros((n, 3)), img=np.zeros((n, 2), np.int64))
     sim = Simulation3D(scene=scene, spheres=sp, bodies=bodies, planes=planes, tris=tris, loading=loading, law=family, law_params=params,
-                        box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity, width=width,
+                        box=box, dt=dt, dt_crit=dt_crit, dt_safe=dt_safe, skin=skin, gravity=scene.gravity, width=width,
                         damping=Damping3(alpha=float(d.alpha), c_abs=float(d.C), c_rot_abs=float(d.C_rot),
                                          local=float(scene.local_damping), adaptive=bool(scene.adaptive_damping),
                                          alpha_now=np.zeros(1), prev_r=np.zeros((n if scene.adaptive_damping else 0, 3)),

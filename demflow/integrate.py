@@ -41,7 +41,7 @@ def kissing_number(R: np.ndarray, r: float) -> np.ndarray:
 
 
 def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np.ndarray, disc_laws: dict,
-                   wall_laws: dict) -> dict:
+                   wall_laws: dict, kissing=kissing_number, partners: np.ndarray | None = None) -> dict:
     """A critical time step that is safe for any packing the scene's discs can form [time].
 
     The central-difference scheme is stable while Δt ≤ 2/ω_max, ω_max² the largest eigenvalue of
@@ -70,9 +70,12 @@ def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np
     ``disc_laws`` {(material a, material b): (kN, kT, cN, cT)} for every pair of disc materials
     that can meet (both orders), ``wall_laws`` {material a: [(kN, kT, cN, cT), ...]} the laws of
     disc material a against the walls; kT and cT are the shear spring and dashpot that can act
-    (zero for a law that always slides).  Returns dict(dt, omega2, gamma, disc, contacts): the
-    safe step, the bounds on ω_max² and γ_max, the disc whose row gives ω_max² and its contact
-    count.
+    (zero for a law that always slides).  A law may also be a function of a boolean mask of the
+    particles (those of material a), returning those four as arrays over them (a Hertzian law, whose
+    stiffness grows with the contact size: :func:`safe_time_step_3d`).  ``kissing(R, r)`` bounds
+    the contacts of a particle of radius R with particles of radius r.  Returns dict(dt, omega2,
+    gamma, disc, contacts): the safe step, the bounds on ω_max² and γ_max, the disc whose row gives
+    ω_max² and its contact count.
     """
     n = r.shape[0]
     if n == 0:
@@ -93,18 +96,26 @@ def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np
             n_walls = len(wall_laws.get(a, ()))
             if partners:  # at most the kissing number, and at most every other disc and wall
                 others = sum(int((mat == b).sum()) - (b == a) for _, b in partners)
-                count[sel] = np.minimum(kissing_number(r[sel], float(r.min())), others + n_walls)
+                count[sel] = np.minimum(kissing(r[sel], float(r.min())), others + n_walls)
             else:
                 count[sel] = n_walls
             best = np.zeros(int(sel.sum()))
             for law, b in partners + [(law, None) for law in wall_laws.get(a, ())]:
+                if callable(law):
+                    law = law(sel)
                 kn, kt = law[which], law[which + 1]
                 Ai = np.maximum(kn * inv_m[sel], kt * rot[sel])
-                Aj = 0.0 if b is None else max(kn * inv_m_max[int(b)], kt * rot_max[int(b)])
-                best = np.maximum(best, np.sqrt(Ai) * (np.sqrt(Ai) + math.sqrt(Aj)))
+                Aj = 0.0 if b is None else np.maximum(kn * inv_m_max[int(b)], kt * rot_max[int(b)])
+                best = np.maximum(best, np.sqrt(Ai) * (np.sqrt(Ai) + np.sqrt(Aj)))
             term[sel] = best
         return count * term, count
 
+    if partners is not None:
+        def rows_capped(which, _rows=rows):
+            term, count = _rows(which)
+            capped = np.minimum(count, partners)
+            return np.where(count > 0, term / np.maximum(count, 1) * capped, 0.0), capped
+        rows = rows_capped
     s_k, count = rows(0)
     s_c, _ = rows(2)
     i = int(np.argmax(s_k))
@@ -115,6 +126,30 @@ def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np
         dt = (math.sqrt(g * g + 4.0 * w2) - g) / w2
     return dict(dt=dt, omega2=w2, gamma=g, disc=i, contacts=int(count[i]))
 
+
+
+def kissing_number_3d(R: np.ndarray, r: float) -> np.ndarray:
+    """An upper bound on how many spheres of radius ``r`` can touch a sphere of radius R without
+    overlapping each other: each blocks a cap of half-angle θ, sin θ = r/(R + r), seen from the centre,
+    and the caps do not overlap, so N ≤ 4π / 2π(1 − cos θ) (14 for equal spheres, whose kissing number is
+    12: the bound is safe)."""
+    s = r / (R + r)
+    return np.floor(2.0 / (1.0 - np.sqrt(1.0 - s * s)) + 1e-9)
+
+
+def safe_time_step_3d(r: np.ndarray, mass: np.ndarray, mat: np.ndarray, pair_laws: dict, wall_laws: dict,
+                      partners: np.ndarray | None = None, inertia: np.ndarray | None = None) -> dict:
+    """The safe critical time step of a 3D sphere packing [time]: :func:`safe_time_step`'s Gershgorin
+    bound with spheres (I = 2/5 m R², so a tangential spring acts through 1/m + R²/I = 3.5/m) and at most
+    :func:`kissing_number_3d` contacts per sphere.  ``pair_laws`` {(a, b): law} and ``wall_laws``
+    {a: [law, ...]} as there: constants (kN, kT, cN, cT), or for a Hertzian law a function of the mask of
+    material a's spheres giving the stiffness at the largest expected overlap and the dashpots
+    (:meth:`demflow.laws.hertz_mindlin.HertzMindlin.time_step_law`).  ``inertia`` (default
+    2/5 m R²) may be infinite for a particle whose ``mass`` already bounds its mobility in every direction
+    (a clump member: see :func:`demflow.build3d`)."""
+    inertia = 0.4 * mass * r * r if inertia is None else inertia
+    return safe_time_step(r, mass, inertia, mat, pair_laws, wall_laws, kissing=kissing_number_3d,
+                          partners=partners)
 
 
 @njit_parallel

@@ -185,6 +185,15 @@ class Scene3D:
                        Rayleigh quotient of the last step's force and displacement increments
     dt : the time step, or None for ``dt_fraction`` × the critical estimate (linear: 2√(m/k);
          Hertz: the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766))
+    allow_unsafe_dt : accept a dt above the safe critical estimate of a packing
+        (:func:`demflow.integrate.safe_time_step_3d`: every sphere with as many contacts as can touch it,
+        rotations coupled by the tangential springs, dashpots; Hertzian stiffness at ``max_overlap``) with an
+        UnsafeTimeStepWarning (``allow_supercritical`` accepts any dt, silently)
+    max_overlap : the largest overlap the scene's contacts are expected to reach, as a fraction of the
+        smaller radius; the safe estimate of a Hertzian scene takes the stiffness there (k ∝ √δ); a
+        run whose overlaps exceed it is outside what the estimate covers (0 < max_overlap <= 0.5)
+    max_contacts : the most contacts a sphere of this scene can have, when its geometry says so (a column
+        or a chain: 2); None: as many as can touch it (:func:`demflow.integrate.kissing_number_3d`)
     skin : neighbour-list margin [length]; None = 0.2 × mean radius
     box : periodic along x and/or y (:class:`demflow.scene.Box`); z is never periodic
     """
@@ -205,6 +214,9 @@ class Scene3D:
     n_steps: int = 1000
     skin: float | None = None
     contact_model: ContactModel = ContactModel(normal="overlap")
+    allow_unsafe_dt: bool = False
+    max_overlap: float = 0.01
+    max_contacts: int | None = None
     outputs: Outputs3D = Outputs3D()
     box: Box = Box()
     description: str = ""
@@ -256,6 +268,13 @@ def check_scene3d(scene: Scene3D) -> None:
     check_number("scene.local_damping", scene.local_damping, ge=0.0, lt=1.0)
     check_flag("scene.adaptive_damping", scene.adaptive_damping)
     check_flag("scene.allow_supercritical", scene.allow_supercritical)
+    check_flag("scene.allow_unsafe_dt", scene.allow_unsafe_dt)
+    check_number("scene.max_overlap", scene.max_overlap, gt=0.0, le=0.5)
+    if scene.max_contacts is not None:
+        check_whole("scene.max_contacts", scene.max_contacts)
+        if scene.max_contacts < 1:
+            raise SceneError(f"scene.max_contacts={scene.max_contacts!r} must be >= 1; give the most contacts a "
+                             "sphere can have, or None")
     scene.damping.check("scene.damping")
     scene.contact_model.check("scene.contact_model")
     _vector3("scene.gravity", scene.gravity)

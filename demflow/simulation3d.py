@@ -37,7 +37,7 @@ class Simulation3D:
     CHUNK = 20000  # steps between last-good-state copies
 
     def __init__(self, *, scene, spheres, bodies, planes, tris, loading, law, law_params, box, dt, dt_crit, skin,
-                 gravity, damping, width):
+                 gravity, damping, width, dt_safe=None):
         self.scene = scene
         self.spheres = spheres
         self.bodies = bodies
@@ -49,6 +49,7 @@ class Simulation3D:
         self.box = box
         self.dt = float(dt)
         self.dt_crit = float(dt_crit)
+        self.dt_safe = float(dt_crit if dt_safe is None else dt_safe)  # integrate.safe_time_step_3d
         self.skin = float(skin)
         self.g = np.asarray(gravity, np.float64)
         self.damping = damping  # Damping3
@@ -167,7 +168,7 @@ class Simulation3D:
                            "non-finite. Reduce")
                     raise BlowUpError(
                         f"scene {self.scene.name!r} blew up at step {bad}: {why} dt (now {self.dt:.4g}, critical "
-                        f"estimate {self.dt_crit:.4g}) or the loading rate. Last good state (step {self.step}) "
+                        f"estimate {self.dt_crit:.4g}, safe estimate {self.dt_safe:.4g}) or the loading rate. Last good state (step {self.step}) "
                         f"saved to {path}", path)
                 if status == REBUILD:
                     self.rebuild()

@@ -59,17 +59,20 @@ def _set(obj, **kw):
 
 @fault3d("3d scene", "scene number")
 def _(pick):
-    key = pick(["dt", "dt_fraction", "skin", "local_damping"])
+    key = pick(["dt", "dt_fraction", "skin", "local_damping", "max_overlap"])
     pools = {"dt": BAD_POSITIVE, "dt_fraction": BAD_POSITIVE, "skin": BAD_POSITIVE,
-             "local_damping": BAD_NONNEG + [1.0, 1.5]}
+             "local_damping": BAD_NONNEG + [1.0, 1.5], "max_overlap": BAD_POSITIVE + [0.6, 1.0]}
     v = pick([x for x in pools[key] if not (x is None and key in ("dt", "skin"))])
     return _set(base3d(), **{key: v}), f"scene.{key}", v
 
 
 @fault3d("3d scene", "scene whole number or flag")
 def _(pick):
-    key = pick(["n_steps", "adaptive_damping", "allow_supercritical"])
-    v = pick(BAD_WHOLE if key == "n_steps" else BAD_FLAG)
+    key = pick(["n_steps", "adaptive_damping", "allow_supercritical", "allow_unsafe_dt", "max_contacts"])
+    if key == "max_contacts":  # None is valid (no bound)
+        v = pick([x for x in BAD_WHOLE if x is not None] + [0, -3])
+    else:
+        v = pick(BAD_WHOLE if key == "n_steps" else BAD_FLAG)
     return _set(base3d(), **{key: v}), f"scene.{key}", v
 
 

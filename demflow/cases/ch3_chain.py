@@ -36,7 +36,8 @@ def chain_scene(n: int = 100, restitution: float = 0.3, dt_fraction: float = 0.1
                                               radius=[0.5] * n, material="ball", mass=[MASS] * n,
                                               fixed=[True] + [False] * (n - 1), velocity=vel),
                    materials={"ball": Material(density=1.0)}, laws={("ball", "ball"): LinearLaw(kn=KN, cn=cn)},
-                   dt_fraction=dt_fraction, outputs=Outputs3D(every=1, track_spheres=tuple(range(n))))
+                   dt_fraction=dt_fraction, outputs=Outputs3D(every=1, track_spheres=tuple(range(n))),
+                   max_contacts=2)  # a chain: each ball touches the two next to it
 
 
 def arrivals(sim) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -34,7 +34,8 @@ def stack_scene(n: int = 9, dt_fraction: float = 0.05, t_end: float = 10.0, name
                                               fixed=[True] + [False] * (n - 1)),
                    materials={"ball": Material(density=1.0)}, laws={("ball", "ball"): LinearLaw(kn=KN)},
                    gravity=(0.0, 0.0, -G), dt_fraction=dt_fraction, n_steps=0,
-                   outputs=Outputs3D(every=1, track_spheres=(n - 1,)))
+                   outputs=Outputs3D(every=1, track_spheres=(n - 1,)),
+                   max_contacts=2)  # a column: each ball touches the two next to it
 
 
 def run_stack(dt_fraction: float, t_end: float = 10.0) -> dict:

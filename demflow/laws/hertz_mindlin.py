@@ -380,6 +380,32 @@ class HertzMindlin(LawFamily):
     def stiffness_bound(self, law) -> float:
         raise NotImplementedError("Hertz stiffness grows with overlap: use stiffness_at(overlap)")
 
+    def time_step_law(self, law, a: str, b: str, max_overlap: float, r_b: float = math.inf,
+                      m_b: float = math.inf):
+        """For :func:`demflow.integrate.safe_time_step_3d`: a function of the radii R and the masses m the
+        contact dashpots use (a clump member's: its clump's) of spheres of material a, giving (kN, kT, cN, cT)
+        of law (a, b) at the largest expected overlap, against partners of radius and dashpot mass at most
+        ``r_b``, ``m_b`` (a plane: infinite).  A contact's
+        R* = R r/(R + r) <= R r_b/(R + r_b) and δ <= max_overlap × R, so kN <= 2E*√(R*δ) and kT <= 8G*√(R*δ)
+        there (the no-slip Mindlin stiffness, also the largest Mindlin-Deresiewicz tangent); kT = 0 when the
+        tangential force can never be elastic (no friction, or tangential="none"); the dashpots 2ζ√(k m*)
+        with m* = m m'/(m + m') <= m m_b/(m + m_b)."""
+        ma, mb = self.scene.materials[a], self.scene.materials[b]
+        E = effective_modulus(ma.young, ma.poisson, mb.young, mb.poisson)
+        G = effective_shear_modulus(ma.young, ma.poisson, mb.young, mb.poisson)
+        et = law.restitution if law.restitution_tangential is None else law.restitution_tangential
+        zn, zt = zeta_for(law.restitution, law.damping), zeta_for(et, law.damping)
+        sticks = law.friction > 0.0 and law.tangential != "none"
+
+        def constants(R, m):
+            rstar = R if math.isinf(r_b) else R * r_b / (R + r_b)
+            mstar = m if math.isinf(m_b) else m * m_b / (m + m_b)
+            root = np.sqrt(rstar * max_overlap * R)
+            kn = 2.0 * E * root
+            kt = 8.0 * G * root if sticks else np.zeros_like(R)
+            return kn, kt, 2.0 * zn * np.sqrt(kn * mstar), 2.0 * zt * np.sqrt(kt * mstar)
+        return constants
+
     def stiffness_at(self, a: str, b: str, rstar: float, overlap: float) -> tuple[float, float]:
         """(k_n, k_t) of material pair (a, b) at overlap δ for effective radius R* [force/length]."""
         ma, mb = self.scene.materials[a], self.scene.materials[b]

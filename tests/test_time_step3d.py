@@ -1,0 +1,72 @@
+"""The safe critical time step of 3D sphere packings (issue 17 item 3 in 3D): safe against the measured
+limit of a dense face-centred cubic Hertz packing (tests/critical_dt3d.py bisects on Δt, never reading the
+estimate), refused above it by build with the usual message.
+
+Measured (2026-11-24): frictional elastic packing limit 1.62 × the estimate (0.49 × the Rayleigh step at
+1 % overlap), with restitution 0.5 dashpots 2.38 ×, frictionless 1.93 × — safe, within a factor 2.4.
+"""
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import critical_dt3d as cd
+from demflow import (HertzMindlinLaw, LinearLaw, Material, Outputs3D, Scene3D, SceneError, Spheres,
+                     UnsafeTimeStepWarning, build)
+
+
+def _estimate(**kw):
+    return build(cd.fcc(dt=1e-12, allow_supercritical=True, **kw)).dt_safe
+
+
+@pytest.mark.parametrize("kw", [dict(), dict(restitution=0.5)], ids=["elastic", "damped"])
+def test_fcc_hertz_packing_estimate_is_safe(kw):
+    est = _estimate(**kw)
+    assert cd.is_unstable(3.0 * est, **kw) or cd.is_unstable(4.0 * est, **kw)  # the limit is within reach
+    measured = cd.measured_critical_dt(est, 4.0 * est, rel=2e-2, **kw)  # asserts est itself is stable
+    assert est <= measured, (est, measured)
+
+
+def test_larger_overlap_means_stiffer_hertz_contacts_and_a_smaller_step():
+    """k ∝ √δ: 16 × the overlap makes every spring 4 × stiffer and the elastic packing's step 2 × smaller."""
+    a, b = _estimate(overlap=0.01), _estimate(overlap=0.16)
+    assert b < a and a / b == pytest.approx(2.0, rel=0.05)
+
+
+def _column(n=5, **kw):
+    return Scene3D(name="column", spheres=Spheres(x=[0.0] * n, y=[0.0] * n, z=[float(k) for k in range(n)],
+                                                  radius=[0.5] * n, material="ball"),
+                   materials={"ball": Material(density=1.0)}, laws={("ball", "ball"): LinearLaw(kn=1e4)},
+                   outputs=Outputs3D(every=0), **kw)
+
+
+def test_build_refuses_above_the_estimate_with_the_fix():
+    sim = build(_column())
+    dt = 1.5 * sim.dt_safe
+    assert dt < sim.dt_crit  # between the estimates: only the safe one refuses
+    with pytest.raises(SceneError) as e:
+        build(_column(dt=dt))
+    for w in ("scene.dt=", "safe critical time step", "give dt <=", "allow_unsafe_dt", "max_overlap"):
+        assert w in str(e.value), str(e.value)
+    with pytest.warns(UnsafeTimeStepWarning, match="allow_unsafe_dt=True"):
+        build(_column(dt=dt, allow_unsafe_dt=True))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        build(_column(dt=dt, allow_supercritical=True))
+
+
+def test_max_contacts_bounds_the_neighbours():
+    """A column declared to touch at most two gets a larger safe step than a packing of the same spheres."""
+    assert build(_column(max_contacts=2)).dt_safe > build(_column()).dt_safe
+
+
+@pytest.mark.parametrize("bad", [0.0, -0.1, 0.6, math.nan, True])
+def test_max_overlap_is_validated(bad):
+    with pytest.raises(SceneError, match="scene.max_overlap"):
+        build(_column(max_overlap=bad))
+
+
+def test_max_contacts_is_validated():
+    with pytest.raises(SceneError, match="scene.max_contacts"):
+        build(_column(max_contacts=0))
