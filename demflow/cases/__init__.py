@@ -23,6 +23,7 @@ from .conformance_3d import Conformance3D
 from .tradeoff_studies import ImpactTradeoff
 from .ch3_chain import ImpulseChain
 from .miyata_uniaxial3d import MiyataUniaxial3D
+from .miyata_uniaxial2d import MiyataUniaxial2D
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
                                               CylinderPoiseuille(), CylinderMovingPlanes(), FreeRectangle())}
@@ -36,6 +37,7 @@ CASES[ElasticStack.name] = ElasticStack()
 CASES[DampedStack.name] = DampedStack()
 CASES[ImpulseChain.name] = ImpulseChain()
 CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
+CASES[MiyataUniaxial2D.name] = MiyataUniaxial2D()
 CASES[Conformance3D.name] = Conformance3D()
 CASES[ImpactTradeoff.name] = ImpactTradeoff()
 
