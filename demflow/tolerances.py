@@ -391,6 +391,14 @@ TOLERANCES = {
         "§3.2 (3), Fig. 29: 'the number of contacts for the rough surface cases is smaller than that for the smooth "
         "surface cases in the initial and transition states': the rough sample's plate/floor ratio is below the "
         "smooth one's at 50 and 250 kPa.", absolute=True, kind="source"),
+    "miyata2d.min-contacts": Tolerance(
+        10.0,
+        "Resolution of the contact-count statements (Figs 29, 30): with m contacts a count ratio moves in steps of "
+        "1/m and a load share by roughly one contact's load, ~1/m; Fig. 30's last 30 % must hold at least 3 "
+        "contacts to say '< 15 %' or '<= 20 %' of anything, i.e. m >= 10. Below 10 contacts (the 2 m reduced box "
+        "has 3-6 on the plate and ~5 on the floor, measured) the statement is shown as a miss with the count, "
+        "whether it would pass or fail; rule added after the first reduced run showed those counts.",
+        absolute=True, kind="source"),
     "miyata2d.quasi-static": Tolerance(
         0.01,
         "A quasi-static bed in a box periodic along x carries its weight and the plate load to the floor: floor "

@@ -246,7 +246,8 @@ def run_sample(bed, sample: str, W: float, p) -> dict:
         rows.append({"step": s3.step, "plate_y": zp, "settlement": 0.0 if touched is None else touched - zp,
                      "stress": stress, "floor_stress": -float(s3.walls.force[0, 1]) / W,
                      "plate_contacts": int(pl.sum()), "floor_contacts": int(fl.sum()),
-                     "max_overlap": float(o.ovl[on].max()) / small if on.any() else 0.0})
+                     "max_overlap": float(o.ovl[on].max()) / small if on.any() else 0.0,
+                     "contacts": int((ot < n).sum())})
         for level in (REGIMES[0], REGIMES[1]):
             if level not in snaps and stress >= level:
                 snaps[level] = {"th": s3.bodies.th.copy(), "x": s3.bodies.x.copy(), "y": s3.bodies.y.copy(),
@@ -331,6 +332,18 @@ def stress_drops(curve, threshold: float, start: float = REGIMES[1]) -> list[tup
     return out
 
 
+def largest_fall(curve, start: float = REGIMES[1]) -> float:
+    """Largest fall of the plate stress below its running maximum, relative to that maximum, after the
+    stress first reached ``start`` (0: it never fell)."""
+    s = curve.stress.to_numpy()
+    k = np.flatnonzero(s >= start)
+    if not k.size:
+        return 0.0
+    s = s[int(k[0]):]
+    run_max = np.maximum.accumulate(s)
+    return float(np.max(1.0 - s / run_max))
+
+
 def regime_stiffness(curve) -> tuple[float, float, float, float]:
     """Secant stiffness dσ/ds [Pa/m] of the initial (0-50 kPa), transition (50-250 kPa) regimes and of
     the first and second halves (by settlement) of the final regime (250 kPa to the end)."""
@@ -394,11 +407,31 @@ def sample_values(r: dict, p) -> dict:
             "ratio 50 kPa": float(ratio[np.flatnonzero(s >= REGIMES[0])[0]]) if (s >= REGIMES[0]).any() else math.nan,
             "ratio 250 kPa": float(ratio[np.flatnonzero(s >= REGIMES[1])[0]]) if (s >= REGIMES[1]).any() else math.nan,
             "floor contacts spread": float((fl.max() - fl.min()) / fl.mean()) if fl.size else math.nan,
+            "floor contacts mean": float(fl.mean()) if fl.size else 0.0, "largest fall": largest_fall(c),
+            "contacts 250 kPa": at_stress(c, REGIMES[1], "contacts") if "contacts" in c else math.nan,
+            "contacts final": float(c.contacts.iloc[-1]) if "contacts" in c else math.nan,
             "share initial": r["shares"][0], "share transition": r["shares"][1], "share final": r["shares"][2],
             "share early": r["shares"][0] + r["shares"][1],
             "balance": abs(float(last.floor_stress - last.stress) - weight) / float(last.stress),
             "final stress": float(last.stress), "plate contacts final": r["plate_contacts_final"]}
 
+
+# Statements the reduced variant (2 m box, one seed) does not reproduce, and why (measured 2026-11-24 on its
+# seed 1 with the default parameters; the numbers in braces are filled from the run).  The full variant
+# judges them as conditions.
+REDUCED_MISSES = {
+    "final-linear": "Circles in the 2 m box, final regime: stiffness change {change:+.0%} between its halves (the "
+                    "superquadrics here: {sq_changes}); measured on seed 1 with the defaults: +46 % (CS), +67 % (CR), "
+                    "the circles stiffening: with Table 2's k_n = 1e7 N/m the overlaps reach {overlap:.2f} r at the "
+                    "final stress and the bed gains contacts as it is squeezed ({c250:.0f} particle contacts at "
+                    "250 kPa, {cend:.0f} at the end; measured with the defaults: circles 108 → 125 (CS) and 105 → 119 "
+                    "(CR), +13-16 %, superquadrics 124 → 133 and 125 → 133, +6-7 %), in a bed of ~60 circles close "
+                    "to a hexagonal crystal (the rows of the rotation map).",
+    "drops": "One 2 m box and one seed: {drops:.0f} fall(s) above the threshold; the largest fall of the stress "
+             "below its running maximum in the final regime is {fall:.1%}. In this variant CS (smooth) shows none "
+             "and CR (rough, the same deposited bed) one: a drop is a rare event in ~60 circles under 5 plate "
+             "contacts; the 10 m box with 8 seeds (variant=full) is the test.",
+}
 
 VARIANTS = {"reduced": dict(width=2.0, n_seeds=1, plate_speed=0.1),
             "full": dict(width=10.0, n_seeds=8, plate_speed=PLATE_SPEED)}
@@ -508,22 +541,50 @@ class MiyataUniaxial2D(Case):
                 return f"{s} seed {next(iter(V[s]))}", v
             return f"{s} seeds {min(V[s])}-{max(V[s])} mean (range {fmt.format(vals.min())}-{fmt.format(vals.max())})", v
 
-        def cond(name, ok, value, tname, src=SRC + " (3)"):
-            out.append(Check.condition(name, bool(ok), value, src, tol(tname).why, kind=tol(tname).kind))
+        n_min = tol("miyata2d.min-contacts").value
+
+        def cond(name, ok, value, tname, src=SRC + " (3)", count=None):
+            """A condition; a miss instead when it rests on ``count`` = (contacts, what) below n_min."""
+            if count is not None and count[0] < n_min:
+                out.append(Check.miss(name, value, value, src, f"Not resolved by this variant: {count[1]} "
+                                      f"{count[0]:.3g} < {n_min:.0f} contacts (the smallest over its seeds), so each "
+                                      f"contact moves the quantity by about 1/{count[0]:.3g}; the statement is judged "
+                                      "in a wider box (variant=full). " + tol("miyata2d.min-contacts").why,
+                                      relative=False))
+            else:
+                out.append(Check.condition(name, bool(ok), value, src, tol(tname).why, kind=tol(tname).kind))
+
+        def fewest(s, key):
+            return float(min(v[key] for v in V[s].values()))
 
         drop = tol("miyata2d.stress-drop").value
+        reduced = q.get("variant") == "reduced" and q.get("width") == VARIANTS["reduced"]["width"]
         for s in V:
             who, v = label(s, "k_transition/k_initial")
             cond(f"Fig. 26 {who}: secant stiffness 50-250 kPa / 0-50 kPa > 1 (large settlement at low stress, then "
                  "a stiffer response)", v > tol("miyata2d.regimes").value, v, "miyata2d.regimes")
             who, v = label(s, "final stiffness change")
             lim = tol("miyata2d.final-linear").value
-            cond(f"Fig. 26 {who}: final regime (> 250 kPa) almost linear: stiffness change between its halves "
-                 f"within ±{lim:.0%}", abs(v) <= lim, v, "miyata2d.final-linear")
+            name = (f"Fig. 26 {who}: final regime (> 250 kPa) almost linear: stiffness change between its halves "
+                    f"within ±{lim:.0%}")
+            if reduced and s[0] == "C":  # not reproduced by the reduced variant: REDUCED_MISSES
+                c250, cend = mean(s, "contacts 250 kPa")[0], mean(s, "contacts final")[0]
+                out.append(Check.miss(name, v, 0.0, SRC + " (3)", REDUCED_MISSES["final-linear"].format(
+                    change=v, overlap=max(float(r["curve"].max_overlap.max()) for r in run.extras["samples"][s].values()),
+                    c250=c250, cend=cend, sq_changes=", ".join(f"{x}: {mean(x, 'final stiffness change')[0]:+.0%}"
+                                                               for x in ("SS", "SR") if x in V) or "not run"),
+                    relative=False))
+            else:
+                cond(name, abs(v) <= lim, v, "miyata2d.final-linear")
             who, v = label(s, "drops")
             if s[0] == "C":
-                cond(f"Fig. 26 {who}: stress drops (> {drop:.0%} of the running maximum) in the final regime: at "
-                     "least one (circles)", v >= 1, v, "miyata2d.stress-drop")
+                name = (f"Fig. 26 {who}: stress drops (> {drop:.0%} of the running maximum) in the final regime: at "
+                        "least one (circles)")
+                if reduced:
+                    out.append(Check.miss(name, v, 1.0, SRC + " (3)", REDUCED_MISSES["drops"].format(
+                        drops=v, fall=mean(s, "largest fall")[0]), relative=False))
+                else:
+                    cond(name, v >= 1, v, "miyata2d.stress-drop")
             else:
                 cond(f"Fig. 26 {who}: stress drops (> {drop:.0%} of the running maximum) in the final regime: none "
                      "(superquadrics)", v == 0, v, "miyata2d.stress-drop")
@@ -534,24 +595,25 @@ class MiyataUniaxial2D(Case):
             r1, r2, r3 = (mean(s, k)[0] for k in ("ratio rate initial", "ratio rate transition", "ratio rate final"))
             cond(f"Fig. 29 {label(s, 'ratio rate initial')[0]}: plate/floor contact ratio rises fastest in the initial "
                  f"regime, slower in the transition, slowest in the final (per 100 kPa: {r1:.3g}, {r2:.3g}, {r3:.3g})",
-                 r1 > r2 > r3, r1, "miyata2d.ratio-rates")
+                 r1 > r2 > r3, r1, "miyata2d.ratio-rates",
+                 count=(fewest(s, "floor contacts mean"), "floor contacts (the ratio's denominator)"))
             who, v = label(s, "share early")
             lim = tol("miyata2d.share-early").value
             cond(f"Fig. 30 {who}: load share of the contacts formed in the initial and transition states "
-                 f"(first 70 %) > {lim:.0%}", v > lim, v, "miyata2d.share-early")
+                 f"(first 70 %) > {lim:.0%}", v > lim, v, "miyata2d.share-early", count=(fewest(s, "plate contacts final"), "plate contacts at the final stress"))
             who, v = label(s, "share final")
             lim = tol("miyata2d.share-final").value
             cond(f"Fig. 30 {who}: load share of the contacts formed in the final state (last 30 %) <= {lim:.0%}",
-                 v <= lim, v, "miyata2d.share-final")
+                 v <= lim, v, "miyata2d.share-final", count=(fewest(s, "plate contacts final"), "plate contacts at the final stress"))
             if s[0] == "S":
                 who, v = label(s, "share initial")
                 lim = tol("miyata2d.share-initial-sq").value
                 cond(f"Fig. 30 {who}: load share of the contacts formed in the initial state (first 40 %) > "
-                     f"{lim:.0%} (superquadrics)", v > lim, v, "miyata2d.share-initial-sq")
+                     f"{lim:.0%} (superquadrics)", v > lim, v, "miyata2d.share-initial-sq", count=(fewest(s, "plate contacts final"), "plate contacts at the final stress"))
                 who, v = label(s, "share final")
                 lim = tol("miyata2d.share-final-sq").value
                 cond(f"Fig. 30 {who}: load share of the contacts formed in the final state < {lim:.0%} "
-                     "(superquadrics)", v < lim, v, "miyata2d.share-final-sq")
+                     "(superquadrics)", v < lim, v, "miyata2d.share-final-sq", count=(fewest(s, "plate contacts final"), "plate contacts at the final stress"))
             who, v = label(s, "balance")
             out.append(Check.against(f"{who}: floor - plate stress = bed weight / width at the final stress "
                                      "(quasi-static loading), error / final stress", v, 0.0, "miyata2d.quasi-static",
@@ -583,7 +645,9 @@ class MiyataUniaxial2D(Case):
             for level, key in ((50, "ratio 50 kPa"), (250, "ratio 250 kPa")):
                 a, b = mean(sm, key)[0], mean(ro, key)[0]
                 cond(f"Fig. 29 {ro} vs {sm}: fewer plate contacts (per floor contact) at {level} kPa ({b:.3g} vs "
-                     f"{a:.3g})", b < a, b - a, "miyata2d.rough-fewer-contacts")
+                     f"{a:.3g})", b < a, b - a, "miyata2d.rough-fewer-contacts",
+                     count=(min(fewest(sm, "floor contacts mean"), fewest(ro, "floor contacts mean")),
+                            "floor contacts (the ratio's denominator)"))
         for surf in ("S", "R"):
             c, s_ = "C" + surf, "S" + surf
             if c in V and s_ in V:
