@@ -736,7 +736,8 @@ class MiyataUniaxial2D(Case):
         ax.set_ylabel("share of the final plate load [%]")
         ax.set_title(f"Load carried by the contacts formed in each state (Miyata Fig. 30), "
                      f"{run.extras['params']['stress_max'] / 1e3:.0f} kPa", fontsize=9)
-        ax.legend(fontsize=7)
+        ax.set_ylim(0, 100)
+        ax.legend(fontsize=7, loc="upper left", ncol=2)
         paths.append(save_figure(fig, f"{outdir}/load_shares.png"))
         # bonus: rotations (Fig. 28) and force chains (Fig. 27) of the smooth samples, first seed
         smooth = [s for s in ("CS", "SS") if s in S]
