@@ -628,6 +628,12 @@ class MiyataUniaxial2D(Case):
             out.append(Check.info(f"{label(s, 'plate contacts final')[0]}: plate contacts at the final stress",
                                   mean(s, "plate contacts final")[0], SRC, "The Fig. 30 groups split these 40/30/30; "
                                   "few contacts make the shares coarse (one contact of 5 is 20 %)."))
+            where = "; ".join(f"seed {seed}: " + (", ".join(f"{1e3 * d:.0f} mm ({a / 1e3:.0f} → {b / 1e3:.0f} kPa)"
+                                                          for d, a, b in stress_drops(r["curve"], drop)) or "none")
+                              for seed, r in run.extras["samples"][s].items())
+            out.append(Check.info(f"{s}: stress drops located (settlement, stress before → after)",
+                                  mean(s, "drops")[0], SRC, f"Falls > {drop:.0%} below the running maximum in the "
+                                  f"final regime: {where}."))
             mo = max(float(r["curve"].max_overlap.max()) for r in run.extras["samples"][s].values())
             out.append(Check.info(f"{s}: largest overlap during loading / smaller semi-axis", mo, SRC + ", Table 2",
                                   "k_n = 1e7 N/m at 900 kPa: overlaps of tens of per cent of the particle (the "
