@@ -1,7 +1,7 @@
 """Fuzz ``build`` with generated invalid scenes, one fault each (issue 19).
 
     python benchmarks/fuzz_scenes.py [--n 400] [--seed 19] [--out benchmarks/results/fuzz_scenes.json]
-                                     [--code DIR]
+                                     [--code DIR] [--3d]
 
 Each scene is a valid base scene (tests/scene_faults.py: dry with phases and a servo wall, periodic,
 saturated) with exactly one field broken: a NaN, an infinity, a negative or zero value, a wrong type
@@ -15,7 +15,9 @@ Outcomes: ``clear`` (SceneError naming the field), ``unnamed`` (SceneError not n
 ``accepted`` (built without complaint), ``other`` (any other exception).  The JSON holds the
 counts overall and per category, and every non-clear case with its message; the robustness page
 of the report (demflow/report/robustness.py) renders it.  ``--code DIR`` imports demflow from DIR
-(to measure another checkout with the same catalogue).
+(to measure another checkout with the same catalogue).  ``--3d`` draws from the 3D catalogue instead
+(tests/scene_faults3d.py: spheres, planes, plates, meshes, clumps, ellipsoids, the Hertz-Mindlin law) and
+writes ``fuzz_scenes3d.json`` by default.
 """
 from __future__ import annotations
 
@@ -61,9 +63,17 @@ def write_json(path: str | Path, obj) -> Path:
 
 
 def main(argv=None):
-    args = parse_args(argv, __doc__, 400, "fuzz_scenes.json")
+    args = parse_args(argv, __doc__, 400, "fuzz_scenes.json", extra=[("--3d", "the 3D catalogue (scene_faults3d)")])
     import scene_faults as sf
 
+    three_d = getattr(args, "3d")
+    catalogue = sf.FAULTS
+    if three_d:
+        import scene_faults3d as sf3
+
+        catalogue = sf3.FAULTS3D
+        if Path(args.out) == ROOT / "benchmarks" / "results" / "fuzz_scenes.json":
+            args.out = str(ROOT / "benchmarks" / "results" / "fuzz_scenes3d.json")
     rng = random.Random(args.seed)
     outcomes = Counter()
     per_cat = defaultdict(Counter)
@@ -72,7 +82,7 @@ def main(argv=None):
     examples = {}
     t0 = time.perf_counter()
     for i in range(args.n):
-        f = rng.choice(sf.FAULTS)
+        f = rng.choice(catalogue)
         scene, path, value = f.make(rng.choice)
         kind, msg = sf.classify(scene, path)
         outcomes[kind] += 1
@@ -86,15 +96,17 @@ def main(argv=None):
     wall = time.perf_counter() - t0
     import demflow
 
-    out = dict(kind="scenes", generated=time.strftime("%Y-%m-%d %H:%M:%S"), python=platform.python_version(),
+    out = dict(kind="scenes3d" if three_d else "scenes", generated=time.strftime("%Y-%m-%d %H:%M:%S"),
+               python=platform.python_version(),
                code=str(Path(demflow.__file__).resolve().parents[1]), n=args.n, seed=args.seed,
                wall_time_s=round(wall, 2), outcomes=dict(outcomes), clear_fraction=outcomes["clear"] / args.n,
                categories={c: dict(v) for c, v in sorted(per_cat.items())},
                faults={c: dict(v) for c, v in sorted(per_fault.items())},
-               catalogue=[dict(category=f.category, fault=f.name) for f in sf.FAULTS],
+               catalogue=[dict(category=f.category, fault=f.name) for f in catalogue],
                examples=dict(sorted(examples.items())), not_clear=bad)
     path = write_json(args.out, out)
-    print(f"{args.n} invalid scenes ({len(sf.FAULTS)} fault kinds, seed {args.seed}) in {wall:.1f} s: "
+    what = "3D scenes" if three_d else "scenes"
+    print(f"{args.n} invalid {what} ({len(catalogue)} fault kinds, seed {args.seed}) in {wall:.1f} s: "
           + ", ".join(f"{k} {v} ({v / args.n:.1%})" for k, v in outcomes.most_common()))
     for c, v in sorted(per_cat.items()):
         print(f"  {c:16s} " + ", ".join(f"{k} {n}" for k, n in v.most_common()))

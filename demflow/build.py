@@ -467,8 +467,8 @@ def build(scene: Scene):
             sim.dt = min(sim.dt, bound)
         elif dt > bound and not scene.allow_supercritical:
             raise SceneError(
-                f"dt={dt:.6g} is above the fluid drag limit {bound:.6g} = safety·2m/K (m the disc mass, K its "
+                f"scene.dt={dt:.6g} is above the fluid drag limit {bound:.6g} = safety·2m/K (m the disc mass, K its "
                 f"self-resistance with a wall at the minimum gap {fluid.gap:.4g}; demflow.coupling): the lagged "
-                f"explicit drag would oscillate and grow. Use dt <= {bound:.6g}, a larger Fluid.min_gap, or set "
-                "allow_supercritical=True")
+                f"explicit drag would oscillate and grow. Use dt <= {bound:.6g} (or dt=None: the default step "
+                "is capped at this limit), a larger Fluid.min_gap, or set allow_supercritical=True")
     return sim

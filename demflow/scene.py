@@ -540,15 +540,22 @@ class Superquadrics:
     def check(self, path: str) -> None:
         """The per-particle shape fields and the knobs, each entry by its path (``scene.discs.n[3]``).
         The arrays (lengths, materials, masses, velocities) are checked by the build."""
-        count = len(self)
+        # x sets the count: checked first, so that a bad x is named as itself, not as a length mismatch
+        if isinstance(self.x, np.ndarray) and self.x.ndim != 1:
+            raise SceneError(f"{path}.x is an array of shape {self.x.shape}; give a 1-D list or array of numbers, "
+                             "one centroid x per particle")
+        xs = check_items(f"{path}.x", self.x, kinds=(tuple, list, np.ndarray))
+        for k, e in enumerate(xs):
+            check_number(f"{path}.x[{k}]", e, unit="length")
+        count = len(xs)
         for key, rule, unit in (("a", dict(gt=0.0), "length"), ("b", dict(gt=0.0), "length"),
                                 ("n", dict(gt=SUPERQUADRIC_N_MIN, le=SUPERQUADRIC_N_MAX),
                                  "Miyata §2.3: smooth convex superquadrics, 1 < n <= 10")):
             v = getattr(self, key)
             items = check_items(f"{path}.{key}", v, kinds=(tuple, list, np.ndarray))
             if len(items) != count:
-                raise SceneError(f"{path}.{key} has {len(items)} entries for {count} particles (len({path}.x)); "
-                                 "give one per particle")
+                raise SceneError(f"{path}.{key} has {len(items)} entries for {count} particles ({path}.x has "
+                                 f"{count}); give one per particle")
             for k, e in enumerate(items):
                 check_number(f"{path}.{key}[{k}]", e, unit=unit, **rule)
         if self.restitution is not None:

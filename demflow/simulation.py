@@ -539,8 +539,14 @@ class Simulation:
                 f"(Δ(kinetic + elastic) {e1 - e0:.6g} + dissipated {contacts + damping:.6g} - work of walls "
                 f"{walls:.6g}, gravity {gravity:.6g} and external forces {b['external']:.6g}), more than "
                 f"{limit:g} × the {supplied:.6g} the chunk started with or was given (tolerance 'energy.blow-up', "
-                f"demflow/tolerances.py): the time step is unstable. Reduce dt (now {self.dt:.4g}, safe estimate "
-                f"{self.dt_safe:.4g}, demflow.integrate.safe_time_step)")
+                f"demflow/tolerances.py): the time step is unstable. Reduce dt ({self._dt_advice()})")
+
+    def _dt_advice(self) -> str:
+        """The time steps a blow-up message quotes: the current one and the limits build knew of."""
+        s = f"now {self.dt:.4g}, safe estimate {self.dt_safe:.4g} (demflow.integrate.safe_time_step)"
+        if self.dt_fluid is not None:
+            s += f", fluid drag limit {self.dt_fluid:.4g} (demflow.coupling)"
+        return s
 
     def _blow_up(self, good, pieces, rec, rec_count, what, why=None):
         """Keep the records so far, restore the last good state ``good``, save it and raise BlowUpError;
@@ -557,8 +563,8 @@ class Simulation:
         path = self._save_last_good()
         if why is None and what is None:
             why = (f"a contact overlapped more than {MAX_OVERLAP_RATIO:.0%} of a radius, a disc moved more than "
-                   f"{MAX_STEP_RATIO:.0%} of its radius in one step, or a force became non-finite. Reduce dt (now "
-                   f"{self.dt:.4g}, safe estimate {self.dt_safe:.4g}) or the loading rate")
+                   f"{MAX_STEP_RATIO:.0%} of its radius in one step, or a force became non-finite. Reduce dt "
+                   f"({self._dt_advice()}) or the loading rate")
         elif why is None:
             why = (f"{what} (its origin may be gravity (now ({self.gx}, {self.gy})), an external or fluid force, a "
                    f"contact law or a wall's motion). Check those for NaN or infinite values, then reduce dt (now "

@@ -150,17 +150,25 @@ class Simulation3D:
                 self.dem_s += time.perf_counter() - t0
                 self.step += done
                 bar.update(done)
-                if status == BLOWUP:
+                # the cycle's tests see overlaps, steps and forces; one O(n) pass per call of the cycle sees a
+                # NaN or inf they did not (a moment, a spin, a plane driven to infinity, a free body under a NaN
+                # gravity)
+                nonfinite = self._nonfinite_state()
+                if status == BLOWUP or nonfinite is not None:
                     self._keep_records(rec, rec_count)
                     bad = self.step
                     self._restore_state(good)
                     path = self._save_last_good()
+                    why = (f"{nonfinite} is not finite (its origin may be gravity (now {tuple(map(float, self.g))}), "
+                           "a mass, a contact law or a wall's motion); check those for NaN or infinite values, "
+                           "then reduce" if nonfinite is not None else
+                           f"a contact overlapped more than {MAX_OVERLAP_RATIO:.0%} of a radius, a sphere moved "
+                           f"more than {MAX_STEP_RATIO:.0%} of its radius in one step, or a force became "
+                           "non-finite. Reduce")
                     raise BlowUpError(
-                        f"scene {self.scene.name!r} blew up at step {bad}: a contact overlapped more than "
-                        f"{MAX_OVERLAP_RATIO:.0%} of a radius, a sphere moved more than {MAX_STEP_RATIO:.0%} "
-                        f"of its radius in one step, or a force became non-finite. Reduce dt (now "
-                        f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate. Last "
-                        f"good state (step {self.step}) saved to {path}", path)
+                        f"scene {self.scene.name!r} blew up at step {bad}: {why} dt (now {self.dt:.4g}, critical "
+                        f"estimate {self.dt_crit:.4g}) or the loading rate. Last good state (step {self.step}) "
+                        f"saved to {path}", path)
                 if status == REBUILD:
                     self.rebuild()
             self._keep_records(rec, rec_count)
@@ -170,6 +178,17 @@ class Simulation3D:
         if checkpoint is not None:
             self.save_checkpoint(checkpoint)
         return self
+
+    def _nonfinite_state(self) -> str | None:
+        """The first non-finite quantity of the particles, bodies, planes, meshes or contact history, or None."""
+        from .simulation import first_nonfinite
+
+        sp, b, pl = self.spheres, self.bodies, self.planes
+        return first_nonfinite({
+            **{f"spheres.{k}": getattr(sp, k) for k in ("pos", "vel", "angvel", "quat", "FM")},
+            **{f"bodies.{k}": getattr(b, k) for k in ("pos", "vel", "L", "angvel", "quat")},
+            **{f"planes.{k}": getattr(pl, k) for k in ("point", "vel", "force")},
+            "meshes.vertices": self.tris.v, "pairs.hist": self.pairs.hist})
 
     def _advance(self, n_steps: int, rec: Records3, rec_count: int):
         """One call of the compiled cycle: (steps done, status, records written)."""

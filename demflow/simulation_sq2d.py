@@ -44,7 +44,7 @@ from .contacts.neighbours import pairs_cell_search, transfer_history
 from .integrate import critical_time_step
 from .jit import njit
 from .laws.linear import linear_contact
-from .scene import SceneError
+from .scene import SceneError, type_phrase
 from .shapes import superquadric as sq
 from .walls import move_walls, set_wall_velocities
 
@@ -66,6 +66,10 @@ SQBodies = namedtuple("SQBodies", [
     "xref", "yref",          # centroid at the last neighbour-list build [length]
     "Fx", "Fy", "M",         # contact force and moment sums of the last step
 ])
+
+# the dynamic state of the bodies and walls (checkpoints, the last good state)
+_SQ_STATE = ("x", "y", "th", "vx", "vy", "om", "xref", "yref", "Fx", "Fy", "M")
+_SQ_WALL_STATE = ("px", "py", "ex", "ey", "vx", "vy", "om", "cx", "cy", "force")
 
 SQPairOut = namedtuple("SQPairOut", [
     "ovl",         # overlap δ [length] (eq 42; <= 0 apart)
@@ -281,9 +285,11 @@ def _refuse_unsupported(scene) -> None:
     if scene.fluid is not None:
         raise SceneError("scene.fluid is set on a scene of Superquadrics; the saturated coupling is for discs only: "
                          "give scene.fluid=None or use Discs")
-    if scene.outputs.track_pairs or len(scene.outputs.snapshots):
-        raise SceneError("scene.outputs.track_pairs/snapshots are not recorded for Superquadrics yet; leave them "
-                         "empty (sim.contacts() gives the contacts at any time)")
+    for key in ("track_pairs", "snapshots"):
+        v = getattr(scene.outputs, key)
+        if len(v):
+            raise SceneError(f"scene.outputs.{key}={v!r}: {key} are not recorded for Superquadrics yet; give "
+                             f"scene.outputs.{key}=() (sim.contacts() gives the contacts at any time)")
 
 
 def _with_skin(scene, skin):
@@ -299,6 +305,8 @@ def build_superquadrics(scene):
     from .laws.restitution import zeta_linear
     from .simulation import walls_and_loading
 
+    from .simulation import check_run_length
+
     _refuse_unsupported(scene)
     p = scene.discs
     x = _as_array("x", p.x)
@@ -313,16 +321,21 @@ def build_superquadrics(scene):
     if isinstance(p.material, str):
         mats = [p.material] * nb
     else:
+        if not isinstance(p.material, (list, tuple, np.ndarray)):
+            raise SceneError(f"scene.discs.material={p.material!r} is {type_phrase(p.material)}; give one material "
+                             "name or a list of names, one per particle")
         mats = list(p.material)
         if len(mats) != nb:
             raise SceneError(f"scene.discs.material has {len(mats)} entries for {nb} particles; give one per particle "
                              "or one name")
     for k, m in enumerate(mats):
         if not (isinstance(m, str) and m in scene.materials):
-            raise SceneError(f"scene.discs.material[{k}]={m!r} is not declared; add it to scene.materials "
-                             f"(declared: {sorted(scene.materials)})")
+            where = "scene.discs.material" + ("" if isinstance(p.material, str) else f"[{k}]")
+            raise SceneError(f"{where}={m!r}: particle {k} uses material {m!r}, which the scene does not declare; "
+                             f"add it to scene.materials (declared: {sorted(scene.materials)})")
     rb = np.array([sq.bounding_radius(a[k], b[k], nexp[k]) for k in range(nb)])
-    props = [sq.mass_properties(a[k], b[k], nexp[k], float(scene.materials[mats[k]].density)) for k in range(nb)]
+    with np.errstate(over="ignore"):  # an overflow is refused below, naming the semi-axes
+        props = [sq.mass_properties(a[k], b[k], nexp[k], float(scene.materials[mats[k]].density)) for k in range(nb)]
     mass = np.array([m for m, _ in props], dtype=np.float64)
     inertia = np.array([i for _, i in props], dtype=np.float64)
     if p.mass is not None:
@@ -338,10 +351,18 @@ def build_superquadrics(scene):
         k = int(bad[0])
         raise SceneError(f"scene.materials[{mats[k]!r}].density gives particle {k} the mass {mass[k]}; give the "
                          "material a density > 0 or give scene.discs.mass")
+    bad = np.flatnonzero(~(np.isfinite(mass) & np.isfinite(inertia) & (inertia > 0)))
+    if bad.size:
+        k = int(bad[0])
+        raise SceneError(f"scene.discs.a[{k}]={a[k]:g}, scene.discs.b[{k}]={b[k]:g} (n={nexp[k]:g}) with "
+                         f"scene.materials[{mats[k]!r}].density={scene.materials[mats[k]].density!r}: particle {k}'s "
+                         f"mass {mass[k]:g} or moment of inertia {inertia[k]:g} is not finite and > 0; give smaller "
+                         "semi-axes, density or mass (or rescale the units)")
     v = _velocities(p.velocity, nb) if p.velocity is not None else np.zeros((nb, 2))
     om = _as_array("angular_velocity", p.angular_velocity, nb) if p.angular_velocity is not None else np.zeros(nb)
 
     wall_geo = wall_geometry(scene)
+    check_run_length("scene.n_steps", int(scene.n_steps), scene, nb, len(scene.walls), 0)
     mat_names, mid, used, law, k_max = material_laws(scene, mats)
     if law.name != "linear":
         raise SceneError(f"scene.laws: the {law.name} law is not available for Superquadrics yet; give LinearLaw "
@@ -479,34 +500,162 @@ class SuperquadricSimulation:
                                  "raise scene.overlap_tolerance")
         self.hist[:, 2:] = hist[:, 2:]  # keep the warm starts found
 
-    def run(self, n_steps: int | None = None) -> "SuperquadricSimulation":
-        """Advance ``n_steps`` (default scene.n_steps) steps."""
-        from .simulation import BlowUpError
+    CHUNK = 20000  # steps between last-good-state copies (as the disc cycle)
 
-        n_steps = int(self.scene.n_steps if n_steps is None else n_steps)
+    def run(self, n_steps: int | None = None) -> "SuperquadricSimulation":
+        """Advance ``n_steps`` (default scene.n_steps) steps.  A blow-up (an overlap or a step beyond
+        half the smaller semi-axis, a non-finite force, or any non-finite body or wall quantity on return
+        from the compiled cycle: a NaN gravity, mass or law output, a wall driven to infinity) raises
+        :class:`~demflow.simulation.BlowUpError` after restoring and saving the last good state (the
+        start of the chunk, at most ``CHUNK`` steps back; :meth:`load_checkpoint` reads it)."""
+        from .scene import check_whole
+
+        from .simulation import check_run_length
+
+        n_steps = check_whole("run(n_steps)", self.scene.n_steps if n_steps is None else n_steps)
+        check_run_length("run(n_steps)", n_steps, self.scene, self.n, self.nw, 0, self.step)  # records fit
         every = int(self.scene.outputs.every)
         rows = (self.step + n_steps - 1) // every - (self.step - 1) // every if every > 0 and n_steps > 0 else 0
         rec = np.zeros((rows, 3))
         rec_count = 0
         if self.n and self.finder.shape[0] == 0 and self.rebuilds == 0:
             self.rebuild()
-        left = n_steps
-        while left > 0:
-            done, status, self.disp_walls, rec_count = run_sq_steps(
-                left, self.step, self.skin, self.disp_walls, self.bodies, self.finder, self.other, self.sx, self.sy,
-                self.hist,
-                self.out, self.walls, self.loading, self.law_params, self.knobs, self.dt, self.gx, self.gy, every,
-                rec, rec_count, self.counters)
-            self.step += done
-            left -= done
-            if status == BLOWUP:
-                self.energy_records = np.vstack([self.energy_records, rec[:rec_count]])
-                raise BlowUpError(f"superquadric run blew up at step {self.step} (an overlap beyond "
-                                  f"{self.knobs.max_overlap} of a semi-axis, a non-finite force or a step beyond "
-                                  f"{MAX_STEP_RATIO} of a semi-axis); reduce dt", None)
-            if status == REBUILD:
-                self.rebuild()
+        target = self.step + n_steps
+        changes = sorted({int(st) for w in self.scene.walls if w.servo is not None for st, _ in w.servo.schedule})
+        while self.step < target:
+            self._set_servo_targets()
+            nxt = [c for c in changes if c > self.step]
+            stop = min(target, self.step + self.CHUNK, nxt[0] if nxt else target)
+            good = self._copy_state()
+            while self.step < stop:
+                done, status, self.disp_walls, rec_count = run_sq_steps(
+                    stop - self.step, self.step, self.skin, self.disp_walls, self.bodies, self.finder, self.other,
+                    self.sx, self.sy, self.hist, self.out, self.walls, self.loading, self.law_params, self.knobs, self.dt, self.gx,
+                    self.gy, every, rec, rec_count, self.counters)
+                self.step += done
+                # the cycle's own tests see overlaps, steps and forces; one O(n) pass per call sees a NaN or
+                # inf no contact met (a body in free flight under a NaN gravity, a wall driven to infinity)
+                bad = self._nonfinite_state()
+                if status == BLOWUP or bad is not None:
+                    self.energy_records = np.vstack([self.energy_records, rec[:rec_count]])
+                    self._blow_up(good, bad)
+                if status == REBUILD:
+                    self.rebuild()
         self.energy_records = np.vstack([self.energy_records, rec[:rec_count]])
+        return self
+
+    def _set_servo_targets(self) -> None:
+        """Servo targets in effect at the current step (Servo.schedule), as the disc cycle."""
+        for w, wall in enumerate(self.scene.walls):
+            if wall.servo is not None:
+                self.loading.servo_F[w] = wall.servo.force_at(self.step)
+
+    def _nonfinite_state(self) -> str | None:
+        """The first non-finite quantity of the bodies, the walls or the contact history, or None."""
+        from .simulation import first_nonfinite
+
+        bd, w = self.bodies, self.walls
+        return first_nonfinite({
+            **{f"bodies.{k}": getattr(bd, k) for k in ("x", "y", "th", "vx", "vy", "om", "Fx", "Fy", "M")},
+            **{f"walls.{k}": getattr(w, k) for k in ("px", "py", "ex", "ey", "vx", "vy", "om", "cx", "cy", "force")},
+            "pairs.hist": self.hist})
+
+    def _blow_up(self, good: dict, bad: str | None):
+        """Restore the last good state ``good``, save it and raise BlowUpError naming the non-finite
+        quantity ``bad`` (None: the cycle's overlap, step or force test stopped it)."""
+        from .simulation import BlowUpError
+
+        bad_step = self.step
+        if bad is not None:
+            why = (f"{bad} is not finite (its origin may be gravity (now ({self.gx}, {self.gy})), a mass, a contact "
+                   f"law or a wall's motion). Check those for NaN or infinite values, then reduce dt (now "
+                   f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
+        else:
+            why = (f"an overlap beyond {self.knobs.max_overlap:.0%} of a semi-axis, a non-finite force or a step beyond "
+                   f"{MAX_STEP_RATIO:.0%} of a semi-axis. Reduce dt (now {self.dt:.4g}, critical estimate "
+                   f"{self.dt_crit:.4g}) or the loading rate")
+        self._restore_state(good)
+        path = self._save_last_good()
+        raise BlowUpError(f"scene {self.scene.name!r} (superquadrics) blew up at step {bad_step}: {why}. Last good "
+                          f"state (step {self.step}) saved to {path}", path)
+
+    # ------------------------------------------------------------------ state I/O
+    def _state_arrays(self) -> dict:
+        """The dynamic state by name (the arrays themselves): bodies, walls, the pair list with its history
+        (kept as it is, so that a run resumed from it is the uninterrupted run to the bit)."""
+        bd, w = self.bodies, self.walls
+        out = {k: getattr(bd, k) for k in _SQ_STATE}
+        out.update({f"wall_{k}": getattr(w, k) for k in _SQ_WALL_STATE})
+        out.update(finder=self.finder, other=self.other, sx=self.sx, sy=self.sy, ix=self.ix, iy=self.iy, hist=self.hist,
+                   scalars=np.array([self.disp_walls, float(self.rebuilds)]))
+        return out
+
+    def _set_state(self, s: dict) -> None:
+        bd, w = self.bodies, self.walls
+        for k in _SQ_STATE:
+            getattr(bd, k)[:] = s[k]
+        for k in _SQ_WALL_STATE:
+            getattr(w, k)[:] = s[f"wall_{k}"]
+        self.finder = np.array(s["finder"], np.int64)
+        self.other = np.array(s["other"], np.int64)
+        m = self.finder.shape[0]
+        self.sx = np.array(s.get("sx", np.zeros(m)), np.float64)  # periodic image shifts (older checkpoints: open box)
+        self.sy = np.array(s.get("sy", np.zeros(m)), np.float64)
+        self.ix = np.array(s.get("ix", np.zeros(self.n)), np.int64)
+        self.iy = np.array(s.get("iy", np.zeros(self.n)), np.int64)
+        self.hist = np.array(s["hist"], np.float64).reshape(-1, HIST)
+        self.out = self._outputs(self.finder.shape[0])
+        self.disp_walls = float(s["scalars"][0])
+        self.rebuilds = int(s["scalars"][1])
+
+    def _copy_state(self) -> dict:
+        return {k: np.array(v, copy=True) for k, v in self._state_arrays().items()} | {"step": self.step}
+
+    def _restore_state(self, s: dict) -> None:
+        self.step = s["step"]
+        self._set_state(s)
+
+    def _save_last_good(self) -> str:
+        import os
+        import tempfile
+        from pathlib import Path
+
+        out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
+        path = out / f"{self.scene.name}-last-good-step{self.step}.npz"
+        self.save_checkpoint(path)
+        return str(path)
+
+    def save_checkpoint(self, path) -> "Path":
+        """Write the dynamic state to ``path`` (.npz) atomically (temporary file + rename)."""
+        import json
+        import os
+        import tempfile
+        from pathlib import Path
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        meta = dict(scene=self.scene.name, family="superquadrics", step=self.step, n=self.n, nw=self.nw, dt=self.dt)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
+        os.close(fd)
+        with open(tmp, "wb") as fh:
+            np.savez(fh, meta=json.dumps(meta), **self._state_arrays())
+        os.replace(tmp, path)
+        return path
+
+    def load_checkpoint(self, path) -> "SuperquadricSimulation":
+        """Restore a state written by :meth:`save_checkpoint` (or saved on a blow-up) for the same scene."""
+        import json
+
+        with np.load(path) as z:
+            meta = json.loads(str(z["meta"]))
+            if (meta.get("family") != "superquadrics" or meta["scene"] != self.scene.name or meta["n"] != self.n
+                    or meta["nw"] != self.nw):
+                raise ValueError(f"checkpoint {path} is for scene {meta['scene']!r} ({meta.get('family', 'discs')}, "
+                                 f"{meta['n']} particles, {meta['nw']} walls), not {self.scene.name!r} (superquadrics, "
+                                 f"{self.n}, {self.nw}); build the same scene")
+            state = {k: z[k].copy() for k in z.files if k != "meta"}
+        self.step = int(meta["step"])
+        self._set_state(state)
         return self
 
     def unwrapped_positions(self):

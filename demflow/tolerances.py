@@ -417,6 +417,25 @@ TOLERANCES = {
         "(hexagonal packing at 1.05× its critical Δt, first 1000 steps), ≈ 430 at 1.2×, and 0.9-6.9 "
         "(thesis-liquefaction at its Δt, 4.4× the safe estimate). 0.25 is 10× the largest stable value and 4× "
         "below the smallest unstable one.", kind="self-consistency"),
+    "stability.energy-growth": Tolerance(
+        2.0,
+        "Stability matrix observer (issue 17 item 2): no cell's scene supplies energy (no driven wall, no load), so a "
+        "run whose kinetic + gravitational (net of buoyancy) + elastic energy ends above its start by more than "
+        "(2 - 1) × its scale (the largest of |E|, kinetic + elastic, and the work of lifting every disc by its "
+        "radius) created energy: garbage. A stable run's change is round-off or negative (dissipation).",
+        kind="self-consistency"),
+    "stability.kinetic-growth": Tolerance(
+        100.0,
+        "Stability matrix observer: a kinetic energy above 100 × (its start + the lift work) is garbage. A stable "
+        "perturbed packing stays within ~2× its start (tests/critical_dt.py uses the same 100 to measure the true "
+        "critical step, bisected to 0.2 %); the unstable 1.05 × critical packing reaches ~1e7×.",
+        kind="self-consistency"),
+    "stability.drift-per-step": Tolerance(
+        1e-14,
+        "Energy drift of a conservative linear packing (central differences, kinetic energy as ½m v_{n-1/2}·v_{n+1/2}): "
+        "exact but for round-off, bounded a priori by ~10 floating-point operations × 1.1e-16 per step × 10 margin, "
+        "relative to the conserved energy, accumulated linearly over the steps (a random walk would give √steps).",
+        kind="exact"),
 }
 
 

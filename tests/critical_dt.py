@@ -12,25 +12,10 @@ import math
 
 import numpy as np
 
-from demflow import Box, ContactModel, Discs, LinearLaw, Material, Outputs, Scene, build
+from demflow import Scene, build
+from demflow.cases.stability_matrix import DENSITY, KN, PERTURBATION, hexagonal, packing_scene  # noqa: F401
 
-KN = 1e5
-DENSITY = 1.0
-PERTURBATION = 1e-4  # velocity scale [length/time]: displacements ~1e-6 R, far inside the linear range
 GROWTH = 100.0  # unstable: the kinetic energy ends above GROWTH × its start (a stable run stays within ~2×)
-
-
-def hexagonal(nx: int = 6, ny: int = 6, radius: float = 1.0, overlap: float = 0.01):
-    """Equal discs on a hexagonal lattice filling a periodic box, each touching six, with contact
-    overlap ``overlap`` × R; by symmetry every disc is in equilibrium.  Returns x, y, r, (lx, ly)."""
-    d = 2.0 * radius - overlap * radius
-    h = d * math.sqrt(3.0) / 2.0
-    x, y = [], []
-    for j in range(ny):
-        for i in range(nx):
-            x.append((i + 0.5 * (j % 2) + 0.25) * d)
-            y.append((j + 0.5) * h)
-    return np.array(x), np.array(y), np.full(nx * ny, radius), (nx * d, ny * h)
 
 
 def random_dense(n: int = 64, seed: int = 1, rmin: float = 0.8, rmax: float = 1.2, fraction: float = 0.88,
@@ -77,20 +62,11 @@ def random_dense(n: int = 64, seed: int = 1, rmin: float = 0.8, rmax: float = 1.
     return pos[:, 0], pos[:, 1], r, (L, L)
 
 
-def scene(packing, dt: float, *, ks: float = KN, friction: float = 0.5, cn: float = 0.0, cs: float = 0.0,
-          seed: int = 3, n_steps: int = 3000, name: str = "packing") -> Scene:
+def scene(packing, dt: float, **kw) -> Scene:
     """The packing with the linear law (kN = KN, kS = ``ks``), perturbed by random velocities and
-    spins of scale PERTURBATION, stepped at ``dt``; build checks skipped (allow_supercritical)."""
-    x, y, r, (lx, ly) = packing
-    rng = np.random.default_rng(seed)
-    v = PERTURBATION * rng.normal(size=(len(x), 2))
-    om = PERTURBATION * rng.normal(size=len(x)) / r
-    law = LinearLaw(kn=KN, ks=ks, cn=cn, cs=cs, friction=friction)
-    return Scene(name=name, discs=Discs(x=x, y=y, radius=r, material="g", velocity=v, angular_velocity=om),
-                 materials={"g": Material(density=DENSITY)}, laws={("g", "g"): law},
-                 contact_model=ContactModel(normal="overlap"), box=Box(periodic_x=(0.0, lx), periodic_y=(0.0, ly)),
-                 dt=dt, n_steps=n_steps, allow_supercritical=True, overlap_tolerance=0.1, skin=0.2,
-                 outputs=Outputs(every=0))
+    spins of scale PERTURBATION, stepped at ``dt``; build checks skipped (allow_supercritical)
+    (:func:`demflow.cases.stability_matrix.packing_scene`)."""
+    return packing_scene(packing, dt, allow_supercritical=True, **kw)
 
 
 def kinetic(sim) -> float:

@@ -22,7 +22,7 @@ import numpy as np
 
 from demflow import (Box, ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene,
                      SceneError, Servo, Wall, build)
-from demflow.scene import Fluid, WallLoad
+from demflow.scene import Fluid, Superquadrics, WallLoad
 
 NAN, INF = math.nan, math.inf
 
@@ -683,6 +683,126 @@ def _(pick):
     return sc, "scene.fluid.boundary", v
 
 
+# superquadrics (the 2D shape family of scene.discs, demflow/simulation_sq2d.py) -------------------------
+def base_superquadric() -> Scene:
+    """Three superquadrics of two materials (n = 2, 4 and 1.5; tilted; a disc-like one) resting apart
+    above a floor between two side walls, with restitution damping, gravity and a given dt."""
+    law = LinearLaw(kn=1e5, ks=5e4, cn=1.0, cs=0.5, friction=0.3)
+    walls = [Wall("floor", (3.0, 0.0), (1.0, 0.0), -6.0, 6.0, "w"),
+             Wall("right", (9.0, 3.0), (0.0, 1.0), -3.0, 3.0, "w"),
+             Wall("left", (-3.0, 3.0), (0.0, -1.0), -3.0, 3.0, "w")]
+    return Scene(name="fuzz-superquadric",
+                 discs=Superquadrics(x=[0.0, 3.0, 6.0], y=[2.0, 2.0, 2.0], a=[1.0, 1.2, 0.8], b=[0.6, 0.5, 0.8],
+                                     n=[2.0, 4.0, 1.5], material=["g", "g", "h"], theta=[0.0, 0.3, -0.2],
+                                     velocity=[[0.1, 0.0], [0.0, 0.0], [0.0, 0.1]], angular_velocity=[0.0, 0.1, 0.0],
+                                     restitution=0.5),
+                 materials={"g": Material(density=2.0), "h": Material(density=3.0), "w": Material()},
+                 laws={("g", "g"): law, ("g", "h"): law, ("g", "w"): law, ("h", "w"): law},
+                 walls=walls, gravity=(0.0, -9.81), dt=1e-4, n_steps=50, outputs=Outputs(every=5))
+
+
+BASES["superquadric"] = base_superquadric
+
+BAD_EXPONENT = [1.0, 0.5, 0.0, -2.0, 10.5, 1e6, NAN, INF, -INF] + NOT_NUMBERS  # 1 < n <= 10
+_SQ_ENTRY_POOLS = {"x": BAD_ENTRY, "y": BAD_ENTRY, "theta": BAD_ENTRY, "angular_velocity": BAD_ENTRY,
+                   "a": BAD_POSITIVE[:6] + BAD_ENTRY, "b": BAD_POSITIVE[:6] + BAD_ENTRY, "n": BAD_EXPONENT,
+                   "mass": BAD_POSITIVE[:6] + BAD_ENTRY}
+_SQ_VALID = {"x": [0.0, 3.0, 6.0], "y": [2.0, 2.0, 2.0], "a": [1.0, 1.2, 0.8], "b": [0.6, 0.5, 0.8],
+             "n": [2.0, 4.0, 1.5], "theta": [0.0, 0.3, -0.2], "angular_velocity": [0.0, 0.1, 0.0],
+             "mass": [1.0, 2.0, 3.0], "material": ["g", "g", "h"]}
+
+
+def _sq(sc, **kw):
+    sc.discs = _set(sc.discs, **kw)
+    return sc
+
+
+@fault("superquadrics", "superquadric entry")
+def _(pick):
+    key = pick(sorted(_SQ_ENTRY_POOLS))
+    v = pick(_SQ_ENTRY_POOLS[key])
+    k = pick([0, 1, 2])
+    return _sq(base_superquadric(), **{key: _entry(_SQ_VALID[key], k, v)}), f"scene.discs.{key}[{k}]", v
+
+
+@fault("superquadrics", "superquadric array of the wrong length or shape")
+def _(pick):
+    key = pick(sorted(_SQ_VALID))
+    kind = pick(["length", "shape"])
+    if kind == "length":
+        v = _SQ_VALID[key][:pick([0, 2])] if key != "x" else _SQ_VALID[key][:2]
+        if key == "x":  # x sets the count: a fourth entry disagrees with every other array
+            v = _SQ_VALID["x"] + [pick([9.0, 12.0])]
+    else:
+        v = pick([[_SQ_VALID[key]], 5.0, "abc", np.zeros((3, 1)), {"0": 1.0}] + ([None] if key not in (
+            "theta", "mass", "angular_velocity") else []))  # None: the default of theta, mass, angular_velocity
+    return _sq(base_superquadric(), **{key: v}), f"scene.discs.{key}", v
+
+
+@fault("superquadrics", "superquadric material")
+def _(pick):
+    v = pick(["sand", "G", "g\n", "", None, 3, ["g", "sand", "h"], ["g", None, "h"], ("g\n", "g", "h"), 2.5,
+              {"g": 1}])
+    sc = _sq(base_superquadric(), material=v)
+    path = "scene.discs.material"
+    if isinstance(v, (list, tuple)):
+        path += f"[{next(k for k, m in enumerate(v) if m not in ('g', 'h'))}]"
+    return sc, path, v
+
+
+@fault("superquadrics", "superquadric velocity")
+def _(pick):
+    sc = base_superquadric()
+    if pick(["entry", "shape"]) == "entry":
+        k, c = pick([0, 1, 2]), pick([0, 1])
+        v = pick(BAD_ENTRY)
+        vel = [list(r) for r in sc.discs.velocity]
+        vel[k][c] = v
+        return _sq(sc, velocity=vel), f"scene.discs.velocity[{k}]", v
+    v = pick([[[0.0, 0.0]] * 2, [[0.0, 0.0, 0.0]] * 3, [0.0, 0.0, 0.0], "fast", 1.0, [[0.0], [0.0], [0.0]]])
+    return _sq(sc, velocity=v), "scene.discs.velocity", v
+
+
+@fault("superquadrics", "superquadric knob")
+def _(pick):
+    key = pick(["restitution", "tolerance", "window", "max_overlap"])
+    extra = {"restitution": [1.5, 2.0], "tolerance": [1.0, 3.0, None], "window": [4.0, 2 * math.pi, None],
+             "max_overlap": [1.0, 1.5, None]}[key]
+    v = pick([b for b in BAD_POSITIVE if b is not None] + extra)  # restitution None: no dashpot (valid)
+    return _sq(base_superquadric(), **{key: v}), f"scene.discs.{key}", v
+
+
+@fault("superquadrics", "superquadric mass overflowing")
+def _(pick):
+    """Semi-axes within the length range (±1e150) whose moment of inertia ρ(∫x² + ∫y²)dA overflows."""
+    v = pick([1e110, 1e130, 1e149])
+    key = pick(["a", "b"])
+    return _sq(base_superquadric(), **{key: [1.0, v, 0.8] if key == "a" else [0.6, v, 0.8]}), f"scene.discs.{key}[1]", v
+
+
+@fault("superquadrics", "superquadric scene unsupported or overlapping")
+def _(pick):
+    kind = pick(["overlap", "fluid", "box", "track_pairs", "snapshots", "family", "n_steps"])
+    sc = base_superquadric()
+    if kind == "n_steps":  # records beyond what can be stored
+        v = pick([10 ** 12, 10 ** 15, 2 ** 62])
+        return _set(sc, n_steps=v, outputs=Outputs(every=1)), "scene.n_steps", v
+    if kind == "overlap":
+        d = pick([0.5, 1.0, 1.5])
+        return _sq(sc, x=[0.0, d, 6.0]), "scene.discs", d
+    if kind == "fluid":
+        v = base_fluid().fluid
+        return _set(sc, fluid=v), "scene.fluid", v
+    if kind == "box":
+        v = Box(periodic_x=(-3.0, 1.0))  # periodic boxes run (miyata-uniaxial-2d); this one is narrower than
+        return _set(sc, box=v), "scene.box", v  # twice the bounding circles' reach, which minimum image needs
+    if kind in ("track_pairs", "snapshots"):
+        v = ((0, 1),) if kind == "track_pairs" else (0, 10)
+        return _set(sc, outputs=_set(sc.outputs, **{kind: v})), f"scene.outputs.{kind}", v
+    v = pick([5, "superquadrics", [1.0, 2.0], {"x": [0.0]}, None, sc.discs.__dict__])  # the entry itself
+    return _set(sc, discs=v), "scene.discs", v
+
+
 CATEGORIES = sorted({f.category for f in FAULTS})
 
 
@@ -704,6 +824,6 @@ def field_paths() -> list[str]:
     """Every dataclass field of the scene objects (for the coverage test)."""
     out = []
     for cls in (Scene, Discs, Material, LinearLaw, Wall, Phase, Servo, Outputs, Box, ContactModel, GlobalDamping,
-                Fluid, WallLoad):
+                Fluid, WallLoad, Superquadrics):
         out += [f"{cls.__name__}.{f.name}" for f in dataclasses.fields(cls)]
     return out

@@ -78,7 +78,7 @@ def test_every_field_of_every_scene_object_is_fuzzed():
     text = "\n".join(paths)
     where = {"Scene": "scene.", "Discs": "scene.discs.", "Material": "].", "LinearLaw": "].", "Wall": "].",
              "Phase": "].", "Servo": "servo.", "Outputs": "outputs.", "Box": "box.", "ContactModel": "contact_model.",
-             "GlobalDamping": "damping.", "Fluid": "fluid.", "WallLoad": "]."}
+             "GlobalDamping": "damping.", "Fluid": "fluid.", "WallLoad": "].", "Superquadrics": "scene.discs."}
     missing = [fp for fp in sf.field_paths() if where[fp.split(".")[0]] + fp.split(".")[1] not in text]
     assert not missing, missing
 
@@ -283,6 +283,24 @@ def test_the_400_scene_script_refuses_all_and_matches_the_committed_results(tmp_
     assert (now["faults"], now["catalogue"]) == (committed["faults"], committed["catalogue"])
 
 
+def test_the_400_scene_script_refuses_all_3d_scenes_and_matches_the_committed_results(tmp_path):
+    """The same script with --3d (tests/scene_faults3d.py: spheres, walls, meshes, clumps, ellipsoids) gives
+    100 % clear refusals and the counts committed in benchmarks/results/fuzz_scenes3d.json."""
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("fuzz_scenes_script", root / "benchmarks" / "fuzz_scenes.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    assert script.main(["--3d", "--n", "400", "--out", str(tmp_path / "f3.json")]) == 0
+    now = json.loads((tmp_path / "f3.json").read_text())
+    committed = json.loads((root / "benchmarks" / "results" / "fuzz_scenes3d.json").read_text())
+    assert now["outcomes"] == {"clear": 400} and now["kind"] == "scenes3d"
+    assert (now["faults"], now["catalogue"]) == (committed["faults"], committed["catalogue"])
+
+
 def test_the_robustness_page_is_rendered_from_the_fuzz_results(tmp_path):
     from pathlib import Path
 
@@ -293,7 +311,9 @@ def test_the_robustness_page_is_rendered_from_the_fuzz_results(tmp_path):
     assert "400/400 (100.0 %) refused by a SceneError naming the broken field" in page
     assert "radii: disc radius" in page and "scene.discs.radius[" in page
     assert "Corrupted engine outputs" in page and "liggghts" in page and "yade_out.json" in page
-    assert "0 unhandled" in summary_line(root)
+    assert "Invalid 3D scenes" in page and "scene.ellipsoids." in page  # benchmarks/fuzz_scenes.py --3d
+    assert "superquadrics: superquadric entry" in page
+    assert "0 unhandled" in summary_line(root) and "400/400 invalid 3D scenes" in summary_line(root)
     assert render(tmp_path) is None and summary_line(tmp_path) == ""  # nothing run: no page
 
 

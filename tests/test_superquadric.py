@@ -508,3 +508,22 @@ def test_moving_wall_bounces_a_superquadric_elastically(theta):
         assert abs(bd.vx[0] / V - 2) <= t and bd.om[0] == 0.0
     else:
         assert abs(bd.om[0]) > 0.1  # an off-centre hit spins it
+
+
+def test_servo_schedule_and_run_length_are_applied_as_for_discs():
+    """A servo wall's schedule changes its target at the scheduled step (the cycle runs in chunks that
+    stop there), and a run whose records would not fit is refused up front, as on the disc path."""
+    from demflow import Servo
+
+    lid = Wall("lid", (0.0, 3.0), (-1.0, 0.0), -5.0, 5.0, "w",
+               servo=Servo(force=1.0, direction=(0.0, -1.0), gain=1e-4, v_max=0.1, schedule=((30, 2.5),)))
+    law = LinearLaw(kn=1e5)
+    sc = Scene(name="sq-servo", discs=Superquadrics([0.0], [1.0], [1.0], [0.5], [4.0], "g"),
+               materials={"g": Material(density=1.0), "w": Material()}, laws={("g", "w"): law},
+               walls=[Wall("floor", (0.0, 0.0), (1.0, 0.0), -5.0, 5.0, "w"), lid], dt=1e-3, n_steps=20)
+    sim = build(sc).run(20)
+    assert sim.loading.servo_F[1] == 1.0
+    sim.run(20)
+    assert sim.loading.servo_F[1] == 2.5 and sim.step == 40
+    with pytest.raises(SceneError, match=r"run\(n_steps\)=1000000000000"):
+        sim.run(10 ** 12)
