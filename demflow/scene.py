@@ -515,6 +515,8 @@ class Superquadrics:
                   dashpot c_n = 2 ln(1/e) √(k_n m*/(π² + ln²(1/e))) on top of the law's cn; None: none.
     tolerance : Brent's tolerance on the surface parameter α [rad] (a speed-accuracy knob).
     window : half-width of the warm-start bracket around the last step's α [rad].
+    max_overlap : a run blows up (BlowUpError) when an overlap exceeds this fraction of the pair's
+                  smaller semi-axis (default 0.5, as the disc cycle's half a radius).
     """
 
     x: Sequence[float]
@@ -530,6 +532,7 @@ class Superquadrics:
     restitution: float | None = None
     tolerance: float = 1e-9
     window: float = math.pi / 8
+    max_overlap: float = 0.5
 
     def __len__(self) -> int:
         return len(np.atleast_1d(self.x))
@@ -559,6 +562,7 @@ class Superquadrics:
             check_number(f"{path}.restitution", self.restitution, gt=0.0, le=1.0, unit="Miyata eq 17")
         check_number(f"{path}.tolerance", self.tolerance, gt=0.0, lt=1.0, unit="rad")
         check_number(f"{path}.window", self.window, gt=0.0, le=math.pi, unit="rad")
+        check_number(f"{path}.max_overlap", self.max_overlap, gt=0.0, lt=1.0, unit="fraction of the smaller semi-axis")
 
 
 @dataclass(frozen=True)

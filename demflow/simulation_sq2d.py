@@ -21,8 +21,14 @@ the circles of curvature (eqs 38-42), so the contact kinematics are the disc cod
 Q - x (see :mod:`demflow.shapes.superquadric`).  Miyata's restitution dashpot (eq 17) is added per
 contact from the pair's effective mass when ``Superquadrics.restitution`` is given.
 
-Not (yet) supported on this path, and refused by the build: periodic boxes, a pore fluid, tracked
-pairs and snapshots.  The cycle is serial (deterministic: pairs and particles in a fixed order).
+A box periodic along x and/or y (:class:`~demflow.scene.Box`) is handled as on the disc path
+(:mod:`demflow.space`, :mod:`demflow.contacts.periodic`): centroids are wrapped into the box at every
+neighbour-list build (image counters ``sim.ix``, ``sim.iy`` keep unwrapped positions), pairs are
+listed by minimum image on the bounding circles, and each pair carries the shift (sx, sy) of its
+other particle's image, added to the centre difference before the pair geometry.
+
+Not (yet) supported on this path, and refused by the build: a pore fluid, tracked pairs and
+snapshots.  The cycle is serial (deterministic: pairs and particles in a fixed order).
 
 History row of a pair (5 columns): N, S (the linear law's springs), α_i, α_j (the last minimisers
 on the finder's and the other's surface; α_i only for a wall pair) and a flag (1: α valid).
@@ -46,7 +52,8 @@ DONE = 0
 REBUILD = 1
 BLOWUP = 2
 HIST = 5  # N, S, α_i, α_j, valid
-MAX_OVERLAP_RATIO = 0.5  # an overlap beyond this fraction of the smaller semi-axis is a blow-up (as the disc cycle)
+MAX_OVERLAP_RATIO = 0.5  # default: an overlap beyond this fraction of the smaller semi-axis is a blow-up (as the disc
+# cycle); Superquadrics.max_overlap changes it per scene (knobs.max_overlap)
 MAX_STEP_RATIO = 0.5  # a particle moving more than this fraction of its smaller semi-axis in one step: blow-up
 
 SQBodies = namedtuple("SQBodies", [
@@ -74,21 +81,23 @@ SQPairOut = namedtuple("SQPairOut", [
 SQKnobs = namedtuple("SQKnobs", [
     "tol",     # Brent tolerance on α [rad]
     "window",  # warm-start bracket half-width [rad]
+    "max_overlap",  # blow-up: an overlap beyond this fraction of the pair's smaller semi-axis
     "zeta",    # (nm, nm) damping ratio of Miyata eq 17 per material pair (0: none)
 ])
 
 
 @njit
-def _pair(k, i, j, nb, bd, walls, hist, law, knobs, dt, counters):
+def _pair(k, i, j, nb, bd, sx, sy, walls, hist, law, knobs, dt, counters):
     """Geometry and force of pair k (finder i, other j; j >= nb: wall j - nb).  Returns
     (δ, nx, ny, fx, fy, Mi, Mj, Fn, Fs, cpx, cpy): the force (fx, fy) on i, the moments on i and on j
-    (or on the wall about its point P), the total normal and shear force and the contact point."""
+    (or on the wall about its point P), the total normal and shear force and the contact point.
+    (sx[k], sy[k]): the shift of j's image in a periodic box (0 in an open box) [length]."""
     xi = bd.x[i]
     yi = bd.y[i]
     warm = hist[k, 4] > 0.0
     if j < nb:
-        dx = bd.x[j] - xi
-        dy = bd.y[j] - yi
+        dx = bd.x[j] + sx[k] - xi
+        dy = bd.y[j] + sy[k] - yi
         reach = bd.rb[i] + bd.rb[j]
         if dx * dx + dy * dy >= reach * reach:
             return -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, xi, yi
@@ -157,10 +166,10 @@ def _pair(k, i, j, nb, bd, walls, hist, law, knobs, dt, counters):
 
 
 @njit
-def pair_pass(bd, finder, other, hist, out, walls, law, knobs, dt, counters):
+def pair_pass(bd, finder, other, sx, sy, hist, out, walls, law, knobs, dt, counters):
     """Every listed pair once, in key order: forces summed into bd.Fx, bd.Fy, bd.M (and the walls'
     force and moment about P, walls.force), outputs into ``out``.  Returns the number of pairs beyond
-    MAX_OVERLAP_RATIO or with a non-finite force, and the elastic energy Σ N²/2kN + S²/2kS."""
+    knobs.max_overlap or with a non-finite force, and the elastic energy Σ N²/2kN + S²/2kS."""
     nb = bd.x.shape[0]
     bd.Fx[:] = 0.0
     bd.Fy[:] = 0.0
@@ -171,8 +180,8 @@ def pair_pass(bd, finder, other, hist, out, walls, law, knobs, dt, counters):
     for k in range(finder.shape[0]):
         i = finder[k]
         j = other[k]
-        delta, ex, ey, fx, fy, Mi, Mj, Fn, Fs, cpx, cpy = _pair(k, i, j, nb, bd, walls, hist, law, knobs, dt,
-                                                                counters)
+        delta, ex, ey, fx, fy, Mi, Mj, Fn, Fs, cpx, cpy = _pair(k, i, j, nb, bd, sx, sy, walls, hist, law, knobs,
+                                                                dt, counters)
         out.ovl[k] = delta
         out.nx[k] = ex
         out.ny[k] = ey
@@ -204,7 +213,7 @@ def pair_pass(bd, finder, other, hist, out, walls, law, knobs, dt, counters):
         elastic += 0.5 * hist[k, 0] ** 2 / law.kn[ma, mb]
         if law.has_shear and law.ks[ma, mb] > 0.0:
             elastic += 0.5 * hist[k, 1] ** 2 / law.ks[ma, mb]
-        if not (delta <= MAX_OVERLAP_RATIO * smallest and np.isfinite(Fn) and np.isfinite(Fs)):
+        if not (delta <= knobs.max_overlap * smallest and np.isfinite(Fn) and np.isfinite(Fs)):
             nbad += 1
     return nbad, elastic
 
@@ -244,8 +253,8 @@ def integrate(bd, gx, gy, dt):
 
 
 @njit
-def run_sq_steps(n, step0, skin, disp_walls, bd, finder, other, hist, out, walls, loading, law, knobs, dt, gx, gy,
-                 every, rec, rec_count, counters):
+def run_sq_steps(n, step0, skin, disp_walls, bd, finder, other, sx, sy, hist, out, walls, loading, law, knobs, dt,
+                 gx, gy, every, rec, rec_count, counters):
     """Run up to n steps from step ``step0``; stop early when the neighbour list is stale (REBUILD: the
     largest displacement since the build plus the walls' exceeds skin/2) or on a blow-up (BLOWUP; the
     step that found it was not applied).  Every ``every``-th step (0: none) writes a row
@@ -253,7 +262,7 @@ def run_sq_steps(n, step0, skin, disp_walls, bd, finder, other, hist, out, walls
     disp_walls, rec_count)."""
     for s in range(n):
         step = step0 + s
-        nbad, elastic = pair_pass(bd, finder, other, hist, out, walls, law, knobs, dt, counters)
+        nbad, elastic = pair_pass(bd, finder, other, sx, sy, hist, out, walls, law, knobs, dt, counters)
         if nbad > 0:
             return s, BLOWUP, disp_walls, rec_count
         set_wall_velocities(step, walls, loading)
@@ -276,14 +285,17 @@ def _refuse_unsupported(scene) -> None:
     if scene.fluid is not None:
         raise SceneError("scene.fluid is set on a scene of Superquadrics; the saturated coupling is for discs only: "
                          "give scene.fluid=None or use Discs")
-    if scene.box.periodic:
-        raise SceneError(f"scene.box={scene.box!r} is periodic; superquadrics run in an open box so far: give "
-                         "Box() or use Discs")
     for key in ("track_pairs", "snapshots"):
         v = getattr(scene.outputs, key)
         if len(v):
             raise SceneError(f"scene.outputs.{key}={v!r}: {key} are not recorded for Superquadrics yet; give "
                              f"scene.outputs.{key}=() (sim.contacts() gives the contacts at any time)")
+
+
+def _with_skin(scene, skin):
+    import dataclasses
+
+    return dataclasses.replace(scene, skin=skin)
 
 
 def build_superquadrics(scene):
@@ -379,9 +391,14 @@ def build_superquadrics(scene):
                       Fx=np.zeros(nb), Fy=np.zeros(nb), M=np.zeros(nb))
     walls, loading = walls_and_loading(scene, wall_geo, np.array([mid[w.material] for w in scene.walls],
                                                                  dtype=np.int64))
-    knobs = SQKnobs(tol=float(p.tolerance), window=float(p.window), zeta=zeta)
+    knobs = SQKnobs(tol=float(p.tolerance), window=float(p.window), max_overlap=float(p.max_overlap), zeta=zeta)
+    from .build import _check_box
+
+    # the disc path's check on the bounding radii (period >= twice 2·r_max + skin); open: None
+    box = _check_box(scene if scene.skin is not None else _with_skin(scene, skin), rb, x, y) if scene.box.periodic \
+        else None
     sim = SuperquadricSimulation(scene, bodies, walls, loading, law.params(), knobs, dt, dt_crit, skin,
-                                 tuple(map(float, scene.gravity)), mat_names)
+                                 tuple(map(float, scene.gravity)), mat_names, box)
     sim.check_initial_overlaps(float(scene.overlap_tolerance))
     return sim
 
@@ -397,7 +414,8 @@ class SuperquadricSimulation:
     ``counters`` = (potential evaluations, pair geometries computed) since the build.
     """
 
-    def __init__(self, scene, bodies, walls, loading, law_params, knobs, dt, dt_crit, skin, gravity, material_names):
+    def __init__(self, scene, bodies, walls, loading, law_params, knobs, dt, dt_crit, skin, gravity, material_names,
+                 box=None):
         self.scene = scene
         self.bodies = bodies
         self.walls = walls
@@ -415,8 +433,13 @@ class SuperquadricSimulation:
         self.disp_walls = 0.0
         self.rebuilds = 0
         self.counters = np.zeros(2, np.int64)
+        self.box = box  # a PeriodicBox, or None (open)
+        self.ix = np.zeros(self.n, np.int64)  # periods crossed (unwrapped x = x + ix·lx)
+        self.iy = np.zeros(self.n, np.int64)
         self.finder = np.empty(0, np.int64)
         self.other = np.empty(0, np.int64)
+        self.sx = np.empty(0)
+        self.sy = np.empty(0)
         self.hist = np.zeros((0, HIST))
         self.out = self._outputs(0)
         self.energy_records = np.zeros((0, 3))
@@ -434,9 +457,18 @@ class SuperquadricSimulation:
         warm-start parameters) by key."""
         bd = self.bodies
         ax, ay, bx, by = self.wall_endpoints()
-        finder, other = pairs_cell_search(bd.x, bd.y, bd.rb, self.skin, ax, ay, bx, by)
+        if self.box is None:
+            finder, other = pairs_cell_search(bd.x, bd.y, bd.rb, self.skin, ax, ay, bx, by)
+            sx = np.zeros(finder.shape[0])
+            sy = np.zeros(finder.shape[0])
+        else:
+            from .contacts.periodic import pairs_periodic
+            from .space import wrap
+
+            wrap(self.box, bd.x, bd.y, self.ix, self.iy)
+            finder, other, sx, sy = pairs_periodic(bd.x, bd.y, bd.rb, self.skin, ax, ay, bx, by, self.box)
         self.hist = transfer_history(self.finder, self.other, self.hist, finder, other, self.n + self.nw)
-        self.finder, self.other = finder, other
+        self.finder, self.other, self.sx, self.sy = finder, other, sx, sy
         self.out = self._outputs(finder.shape[0])
         bd.xref[:] = bd.x
         bd.yref[:] = bd.y
@@ -451,8 +483,8 @@ class SuperquadricSimulation:
         hist = self.hist.copy()
         counters = np.zeros(2, np.int64)
         bd = self.bodies
-        pair_pass(bd, self.finder, self.other, hist, self.out, self.walls, self.law_params, self.knobs, self.dt,
-                  counters)
+        pair_pass(bd, self.finder, self.other, self.sx, self.sy, hist, self.out, self.walls, self.law_params, self.knobs,
+                  self.dt, counters)
         bd.Fx[:] = 0.0
         bd.Fy[:] = 0.0
         bd.M[:] = 0.0
@@ -498,7 +530,7 @@ class SuperquadricSimulation:
             while self.step < stop:
                 done, status, self.disp_walls, rec_count = run_sq_steps(
                     stop - self.step, self.step, self.skin, self.disp_walls, self.bodies, self.finder, self.other,
-                    self.hist, self.out, self.walls, self.loading, self.law_params, self.knobs, self.dt, self.gx,
+                    self.sx, self.sy, self.hist, self.out, self.walls, self.loading, self.law_params, self.knobs, self.dt, self.gx,
                     self.gy, every, rec, rec_count, self.counters)
                 self.step += done
                 # the cycle's own tests see overlaps, steps and forces; one O(n) pass per call sees a NaN or
@@ -539,7 +571,7 @@ class SuperquadricSimulation:
                    f"law or a wall's motion). Check those for NaN or infinite values, then reduce dt (now "
                    f"{self.dt:.4g}, critical estimate {self.dt_crit:.4g}) or the loading rate")
         else:
-            why = (f"an overlap beyond {MAX_OVERLAP_RATIO:.0%} of a semi-axis, a non-finite force or a step beyond "
+            why = (f"an overlap beyond {self.knobs.max_overlap:.0%} of a semi-axis, a non-finite force or a step beyond "
                    f"{MAX_STEP_RATIO:.0%} of a semi-axis. Reduce dt (now {self.dt:.4g}, critical estimate "
                    f"{self.dt_crit:.4g}) or the loading rate")
         self._restore_state(good)
@@ -554,7 +586,7 @@ class SuperquadricSimulation:
         bd, w = self.bodies, self.walls
         out = {k: getattr(bd, k) for k in _SQ_STATE}
         out.update({f"wall_{k}": getattr(w, k) for k in _SQ_WALL_STATE})
-        out.update(finder=self.finder, other=self.other, hist=self.hist,
+        out.update(finder=self.finder, other=self.other, sx=self.sx, sy=self.sy, ix=self.ix, iy=self.iy, hist=self.hist,
                    scalars=np.array([self.disp_walls, float(self.rebuilds)]))
         return out
 
@@ -566,6 +598,11 @@ class SuperquadricSimulation:
             getattr(w, k)[:] = s[f"wall_{k}"]
         self.finder = np.array(s["finder"], np.int64)
         self.other = np.array(s["other"], np.int64)
+        m = self.finder.shape[0]
+        self.sx = np.array(s.get("sx", np.zeros(m)), np.float64)  # periodic image shifts (older checkpoints: open box)
+        self.sy = np.array(s.get("sy", np.zeros(m)), np.float64)
+        self.ix = np.array(s.get("ix", np.zeros(self.n)), np.int64)
+        self.iy = np.array(s.get("iy", np.zeros(self.n)), np.int64)
         self.hist = np.array(s["hist"], np.float64).reshape(-1, HIST)
         self.out = self._outputs(self.finder.shape[0])
         self.disp_walls = float(s["scalars"][0])
@@ -620,6 +657,15 @@ class SuperquadricSimulation:
         self.step = int(meta["step"])
         self._set_state(state)
         return self
+
+    def unwrapped_positions(self):
+        """(x, y) of the centroids with the periods crossed added back [length] (as the disc path)."""
+        bd = self.bodies
+        if self.box is None:
+            return bd.x.copy(), bd.y.copy()
+        ux = bd.x + (self.ix * self.box.lx if self.box.periodic_x else 0.0)
+        uy = bd.y + (self.iy * self.box.ly if self.box.periodic_y else 0.0)
+        return ux, uy
 
     def kinetic_energy(self) -> float:
         """½Σ(m v² + I ω²) at the half-step velocities [force·length]."""

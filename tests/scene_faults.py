@@ -765,8 +765,9 @@ def _(pick):
 
 @fault("superquadrics", "superquadric knob")
 def _(pick):
-    key = pick(["restitution", "tolerance", "window"])
-    extra = {"restitution": [1.5, 2.0], "tolerance": [1.0, 3.0, None], "window": [4.0, 2 * math.pi, None]}[key]
+    key = pick(["restitution", "tolerance", "window", "max_overlap"])
+    extra = {"restitution": [1.5, 2.0], "tolerance": [1.0, 3.0, None], "window": [4.0, 2 * math.pi, None],
+             "max_overlap": [1.0, 1.5, None]}[key]
     v = pick([b for b in BAD_POSITIVE if b is not None] + extra)  # restitution None: no dashpot (valid)
     return _sq(base_superquadric(), **{key: v}), f"scene.discs.{key}", v
 
@@ -793,8 +794,8 @@ def _(pick):
         v = base_fluid().fluid
         return _set(sc, fluid=v), "scene.fluid", v
     if kind == "box":
-        v = Box(periodic_x=(-3.0, 9.0))
-        return _set(sc, box=v), "scene.box", v
+        v = Box(periodic_x=(-3.0, 1.0))  # periodic boxes run (miyata-uniaxial-2d); this one is narrower than
+        return _set(sc, box=v), "scene.box", v  # twice the bounding circles' reach, which minimum image needs
     if kind in ("track_pairs", "snapshots"):
         v = ((0, 1),) if kind == "track_pairs" else (0, 10)
         return _set(sc, outputs=_set(sc.outputs, **{kind: v})), f"scene.outputs.{kind}", v

@@ -23,6 +23,7 @@ from .conformance_3d import Conformance3D
 from .tradeoff_studies import ImpactTradeoff
 from .ch3_chain import ImpulseChain
 from .miyata_uniaxial3d import MiyataUniaxial3D
+from .miyata_uniaxial2d import MiyataUniaxial2D
 from .stability_matrix import StabilityMatrix
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
@@ -37,6 +38,7 @@ CASES[ElasticStack.name] = ElasticStack()
 CASES[DampedStack.name] = DampedStack()
 CASES[ImpulseChain.name] = ImpulseChain()
 CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
+CASES[MiyataUniaxial2D.name] = MiyataUniaxial2D()
 CASES[Conformance3D.name] = Conformance3D()
 CASES[ImpactTradeoff.name] = ImpactTradeoff()
 CASES[StabilityMatrix.name] = StabilityMatrix()

@@ -77,9 +77,18 @@ FIGURES = (
                                                           r"seed \d+, stage B|stage B / stage A|falls from stage A"),)),
     Figure("C&S", "experiment, stress control", "the experiment's forces: F_H/F_V 0.39, then 0.33",
            (("cs-photoelastic", r"^servo"),)),
-    Figure("Miyata", "§3.2, Tables 1-2, Figs 26-30", "2D uniaxial compression of circles and superquadrics: regimes "
-           "0-50, 50-250, > 250 kPa; stress drops for circles only; early contacts carry > 70 % of the load",
-           pending="issue 15: 2D superquadrics and miyata-uniaxial-2d"),
+    Figure("Miyata", "§3.2, Tables 1-2", "2D uniaxial compression: circles r = 15 cm and n = 4 superquadrics "
+           "(a = 19.5, b = 9.76 cm) of equal mass; ρ 1650, k 1e7 (1e8 with walls), e 0.01, μ 0.51, Δt 1.7078e-4 s",
+           (("miyata-uniaxial-2d", r"^Table [12]"),)),
+    Figure("Miyata", "§3.2, Fig. 26", "stress-settlement: regimes 0-50, 50-250, > 250 kPa (almost linear); stress "
+           "drops for circles only; rough samples settle more, final regimes parallel",
+           (("miyata-uniaxial-2d", r"^Fig\. 26"),)),
+    Figure("Miyata", "§3.2, Fig. 29", "plate/floor contact ratio rises fast, then slower, then slowest; floor "
+           "contacts almost constant; rough samples have fewer plate contacts at 50-250 kPa",
+           (("miyata-uniaxial-2d", r"^Fig\. 29 .*(rises|constant|fewer)"),)),
+    Figure("Miyata", "§3.2, Fig. 30", "load share at 900 kPa of the contacts formed first: initial + transition > "
+           "70 %, final <= 20 %; superquadrics initial > 50 %, final < 15 %",
+           (("miyata-uniaxial-2d", r"^Fig\. 30"),)),
     Figure("Miyata", "§3.3, Figs 31-37", "3D uniaxial compression of 1500 ellipsoids: regimes 0-100, 100-400, > 400 "
            "kPa; ≈ 257 floor contacts; plate PDF ≈ q-model N = 3; floor ≈ Mueth",
            (("miyata-uniaxial-3d", r"."),), pending="issues 14 and 16: the clump and ellipsoid beds"),
