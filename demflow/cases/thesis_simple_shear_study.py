@@ -47,12 +47,13 @@ class SimpleShearTradeoff(TradeoffCase):
         "rms of the absolute differences from the reference (scale 1).",
         "Chaos floor: the reference with the disc density × 1.0001 (Δt and the fluid stride move by 5e-5): 20 "
         "discs through slip events are chaotic, and a knob's error is only meaningful above this floor.",
-        "Density scaling and elements per disc are resolution knobs (listed coarse to fine toward the reference): "
-        "their error must shrink; the stride safety 1.0 is the unsafe side of the reference's 0.5.",
+        "Density scaling (300, 100 → 30), elements per disc (8, 12 → 16) and the stride safety (1.0, 0.75 → 0.5) "
+        "are resolution knobs, listed coarse to fine toward the reference: each one's error must shrink (the "
+        "hand-made study found the elements' effect below its chaos floor: such a knob fails this check).",
     )
-    params = dict(knob="sat_density_scale", values="300,100", reference=30.0, knobs="elements=8;safety=1.0",
+    params = dict(knob="sat_density_scale", values="300,100", reference=30.0, knobs="elements=8,12;safety=1.0,0.75",
                   fixed="variants=loose-saturated;ensemble=;gamma_max=0.06;elements=16;safety=0.5",
-                  floor_param="sat_density_scale", floor_value=30.003, resolution="sat_density_scale",
+                  floor_param="sat_density_scale", floor_value=30.003, resolution="sat_density_scale,elements,safety",
                   scale=1.0, warmup="gamma_max=0.003")
 
 
