@@ -143,6 +143,7 @@ class TradeoffStudy:
                              particle_steps_per_s=(r["particle_steps"] / r["wall_s"]) if r["wall_s"] > 0 else math.nan,
                              dem_s=r["dem_s"], fluid_s=r["bem_s"]))
         t = pd.DataFrame(rows)
+        t["value"] = pd.Series([r["value"] for r in rows], dtype=object)  # each knob's own type (int, float, str)
         floor = float(t.loc[t.run == "chaos floor", "error"].iloc[0]) if self.floor else 0.0
         t["error_over_floor"] = t.error / floor if floor > 0 else math.nan
         t["pareto"] = pareto_front(t.wall_s, t.error)

@@ -137,9 +137,13 @@ class TradeoffCase(Case):
                 continue
             errs = k.error.to_numpy()
             shrinking = bool(all(b < a for a, b in zip(errs, errs[1:])))
+            note = ""
+            if not shrinking and s.floor_error > 0 and bool((errs <= s.accept * s.floor_error).all()):
+                note = (f"; every error is within {s.accept:g} × the chaos floor {s.floor_error:.3g}: this knob's "
+                        "effect is not resolved above the chaos")
             out.append(Check.condition(
                 f"{knob}: the error shrinks toward the reference at every refinement ({', '.join(map(str, k.value))};"
-                f" errors {', '.join(f'{e:.3g}' for e in errs)}; value: finest error / coarsest)", shrinking,
+                f" errors {', '.join(f'{e:.3g}' for e in errs)}{note}; value: finest error / coarsest)", shrinking,
                 errs[-1] / errs[0] if errs[0] > 0 else 0.0, self.source,
                 "Convergence: a resolution knob whose error does not fall as it approaches the reference is not "
                 "measured by this study (its effect is below the chaos floor, or the reference is not fine enough).",
