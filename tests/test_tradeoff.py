@@ -140,3 +140,28 @@ def test_a_tiny_study_with_fixed_parameters_two_knobs_and_an_observable_filter()
     assert any(n.startswith("recommended:") for n in infos)
     (title, table), = case.tables(run, p)
     assert "t_end = 0.05" in title and list(table.value)[:2] == ["", ""]
+
+
+def test_a_resolution_knob_below_the_chaos_floor_fails_its_check_and_says_why():
+    """Errors that do not shrink are a failed self-consistency check, never loosened; when they all lie within
+    accept × the chaos floor the check says the knob is not resolved above the chaos."""
+    from types import SimpleNamespace
+
+    import pandas as pd
+
+    from demflow.cases.base import CaseRun
+
+    t = pd.DataFrame(dict(run=["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "kn = 2e7"],
+                          knob=["", "", "dt", "dt", "kn"], value=[None, None, 4e-5, 1e-5, 2e7],
+                          error=[0.0, 0.03, 0.02, 0.025, 0.5], wall_s=[4.0, 4.0, 1.0, 2.0, 4.0],
+                          recommended=[False, False, True, False, False]))
+    s = SimpleNamespace(table=t, floor={"kn": 1.0001e7}, floor_error=0.03, accept=2.0, within_floor=True,
+                        recommended=t.iloc[2].to_dict())
+    case = TinyImpactStudy()
+    checks = case.checks(CaseRun(extras={"study": s}), case.merged())
+    (dt,) = [c for c in checks if c.kind == "self-consistency"]
+    assert not dt.passed and "not resolved above the chaos" in dt.name and dt.value == pytest.approx(1.25)
+    t.loc[3, "error"] = 0.2  # above the floor and growing: failed, without the note
+    (dt,) = [c for c in TinyImpactStudy().checks(CaseRun(extras={"study": s}), case.merged())
+             if c.kind == "self-consistency"]
+    assert not dt.passed and "not resolved" not in dt.name
