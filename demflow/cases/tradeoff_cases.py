@@ -49,17 +49,18 @@ class FallingDiscTradeoff(TradeoffCase):
         "Only the stride-1 run, to t_end = 0.01 s (5 drag relaxation times m/K; the case runs 0.02 s), without the "
         "case's strides 4 and 16 and its Δt/2 twin (fixed: strides=1, dt_study=0, t_end=0.01); the mesh study of "
         "the case (16, 32, 64, 128 elements) is kept, so its Richardson check stays valid at every setting.",
-        "Knobs: BEM elements on the disc (the case's 64) and the time step dt (the case's 1e-4 s; the fluid is "
-        "solved every step).",
-        "Reference = 128 elements, dt = 1e-4 s: the finest affordable here, not a converged solution (the lagged "
-        "explicit drag is first order in Δt: the dt knob's errors are relative to Δt = 1e-4, not to Δt → 0).",
+        "Knobs: BEM elements on the disc (16, 32, 64 → 128; the case's 64) and the time step dt (1.5e-4, 1e-4 → "
+        "5e-5 s; the case's 1e-4; the fluid is solved every step, and the fluid drag limit safety·2m/K with a wall "
+        "at the minimum gap, 1.59e-4 s, refuses larger steps).",
+        "Reference = 128 elements, dt = 5e-5 s: the finest affordable here, not a converged solution (the lagged "
+        "explicit drag is first order in Δt: the dt knob's errors are relative to Δt = 5e-5, not to Δt → 0).",
         "Chaos floor: the reference with the disc density × 1.0001; the fall is not chaotic, so the floor is the "
         "observables' sensitivity to a 1e-4 change of the driving density difference (about 1e-4 by eq 5.6).",
         "Observables (thesis-falling-disc's observables hook): the disc velocity at t_end/8, t_end/4, t_end/2 and "
         "t_end, and the BEM drag K. Error: rms of the relative differences from the reference.",
     )
-    params = dict(knob="elements", values="16,32,64", reference=128, knobs="dt=4e-4,2e-4",
-                  fixed="strides=1;dt_study=0;t_end=0.01;dt=1e-4", floor_param="rho_s", floor_value=2.0002,
+    params = dict(knob="elements", values="16,32,64", reference=128, knobs="dt=1.5e-4,1e-4",
+                  fixed="strides=1;dt_study=0;t_end=0.01;dt=5e-5", floor_param="rho_s", floor_value=2.0002,
                   resolution="elements,dt", warmup="t_end=0.0005")
 
 
