@@ -165,3 +165,30 @@ def test_a_resolution_knob_below_the_chaos_floor_fails_its_check_and_says_why():
     (dt,) = [c for c in TinyImpactStudy().checks(CaseRun(extras={"study": s}), case.merged())
              if c.kind == "self-consistency"]
     assert not dt.passed and "not resolved" not in dt.name
+
+
+def test_photoelastic_study_settings_leave_out_what_the_study_does_not_compare():
+    """cs-photoelastic with one seed, no Table 2/3 runs and no stored engine runs still checks and observes;
+    a smaller Δt fraction runs proportionally more cycles (the walls move as far in the same time)."""
+    from demflow.cases.cs_photoelastic import servo_steps, stage_steps
+
+    case = get_case("cs-photoelastic")
+    p = case.merged(dict(n_seeds=1, other_tables=0, engine_refs=0, load_a=150, load_b=100, rest=200,
+                         servo_cycles=300, dt_fraction=0.05))
+    assert stage_steps(p) == (700, 1300) and servo_steps(p) == 600
+    run = case.run(p)
+    assert run.extras["engines"] == {} and set(run.extras["tables"]) == {"table1"}
+    names = [c.name for c in case.checks(run, p)]
+    assert not any(n.startswith(("table2", "table3", "stage B band")) for n in names)
+    obs = case.observables(run, p)
+    assert len(obs) == 14 and all(np.isfinite(v) for v in obs.values())
+
+
+def test_falling_disc_without_its_dt_twin_observes_velocity_and_drag():
+    case = get_case("thesis-falling-disc")
+    p = case.merged(dict(elements=16, t_end=0.002, strides="1", dt_study=0, study="16,32"))
+    run = case.run(p)
+    assert set(run.results) == {"k1"}
+    assert not any(c.name.startswith("Δt study") for c in case.checks(run, p))
+    obs = case.observables(run, p)
+    assert len(obs) == 5 and obs["v(t = 1 t_end) [cm/s]"] < obs["v(t = 0.5 t_end) [cm/s]"] < 0
