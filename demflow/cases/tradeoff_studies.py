@@ -21,8 +21,9 @@ A study's ``params`` are text, so that `--set` can change them:
 Every value is converted to the type of the studied case's default (:func:`parse_assignments`).
 Each study's checks are self-consistency: along a resolution knob the error must shrink toward the
 reference at every refinement (a knob whose error does not shrink is not what limits the result, or
-the study is wrong: it shows as a failed check); the chaos floor and the recommended setting are
-reported (informative).
+the study is wrong: it shows as a failed check; a check whose errors all lie within ``accept`` × the
+chaos floor says so, passed or failed); the chaos floor and the recommended setting are reported
+(informative).
 """
 from __future__ import annotations
 
@@ -138,7 +139,7 @@ class TradeoffCase(Case):
             errs = k.error.to_numpy()
             shrinking = bool(all(b < a for a, b in zip(errs, errs[1:])))
             note = ""
-            if not shrinking and s.floor_error > 0 and bool((errs <= s.accept * s.floor_error).all()):
+            if s.floor_error > 0 and bool((errs <= s.accept * s.floor_error).all()):
                 note = (f"; every error is within {s.accept:g} × the chaos floor {s.floor_error:.3g}: this knob's "
                         "effect is not resolved above the chaos")
             out.append(Check.condition(
