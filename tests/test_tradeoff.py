@@ -142,6 +142,13 @@ def test_a_tiny_study_with_fixed_parameters_two_knobs_and_an_observable_filter()
     assert "t_end = 0.05" in title and list(table.value)[:2] == ["", ""]
 
 
+def test_values_set_from_the_command_line_parse():
+    """`--set values=4e-5,1e-5` reaches merged() as a tuple, which it turns into the tuple's text."""
+    case = TinyImpactStudy()
+    p = case.merged(dict(values=(4e-5, 1e-5)))
+    assert case.settings(p)["knobs"]["dt"] == [4e-5, 1e-5]
+
+
 def test_a_resolution_knob_below_the_chaos_floor_fails_its_check_and_says_why():
     """Errors that do not shrink are a failed self-consistency check, never loosened; when they all lie within
     accept × the chaos floor the check (passed or failed) says the knob is not resolved above the chaos."""

@@ -101,7 +101,9 @@ class TradeoffCase(Case):
 
         d = get_case(self.study_case).params
         fixed = parse_assignments(p.get("fixed", ""), d, "fixed")
-        knobs = {p["knob"]: [typed(v, d[p["knob"]]) for v in str(p["values"]).split(",") if v.strip()]}
+        # `--set values=1e-5,5e-6` arrives as the text of a tuple: "(1e-05, 5e-06)"
+        values = str(p["values"]).strip().strip("()[]")
+        knobs = {p["knob"]: [typed(v, d[p["knob"]]) for v in values.split(",") if v.strip()]}
         knobs.update(parse_knobs(p.get("knobs", ""), d))
         reference = dict(fixed, **{p["knob"]: typed(p["reference"], d[p["knob"]])})
         floor = {p["floor_param"]: typed(p["floor_value"], d[p["floor_param"]])} if p.get("floor_param") else None
