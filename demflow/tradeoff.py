@@ -10,7 +10,8 @@ A :class:`TradeoffStudy` (freud-like: configure, ``compute()`` returns ``self``,
 3. once per value of each knob, every other parameter at the reference.
 
 Observables are the case's own check values (every finite, non-informative check: what the case
-claims to reproduce).  A run's *error* is the root mean square over observables of
+claims to reproduce), or what its ``observables`` hook returns (e.g. a curve sampled on a grid), kept
+to the names containing one of ``observables`` when that is given.  A run's *error* is the root mean square over observables of
 |v − v_ref| / max(|v_ref|, scale), where ``scale`` guards zero references; its *cost* is the wall
 time and the particle-steps per second (from each result's steps and particle count), with the
 simulation time split into DEM and fluid (BEM) time where the results record them.  Runs go through
@@ -20,7 +21,8 @@ The table marks the Pareto front (no other run is both cheaper and more accurate
 *recommended* setting: the cheapest knob setting whose error is within ``accept`` × the chaos floor
 (default 2: indistinguishable from the reference up to the floor's own noise), or the most accurate
 knob setting when none is (``within_floor`` says which).  With ``warmup`` one untimed run compiles
-the kernels first, so that no timed run pays for compilation.
+the kernels first, so that no timed run pays for compilation (``True``: the last knob run; a dict:
+overrides of the reference for a cheaper run that compiles the same kernels).
 """
 from __future__ import annotations
 
@@ -48,8 +50,11 @@ def run_observed(job) -> dict:
     from .cases.base import counted
     from .sweep import timed_case_run
 
-    _, _, run, checks, wall = timed_case_run(*job)
-    obs = {c.name: float(c.value) for c in counted(checks) if math.isfinite(c.value)}
+    case, p, run, checks, wall = timed_case_run(*job)
+    obs = case.observables(run, p)
+    if obs is None:
+        obs = {c.name: float(c.value) for c in counted(checks)}
+    obs = {k: float(v) for k, v in obs.items() if math.isfinite(v)}
     return dict(observables=obs, wall_s=wall, **_cost(run))
 
 
@@ -70,11 +75,12 @@ class TradeoffStudy:
     defaults for the reference run; floor: overrides applied on top of the reference for the chaos
     floor run (None: no floor, errors are then judged against ``accept`` × 0); scale: the smallest
     reference magnitude an observable's relative error divides by; accept: the recommended run's
-    error may be this many times the floor's."""
+    error may be this many times the floor's; observables: keep only the observables whose names
+    contain one of these strings (None: all); warmup: True, False or overrides (module docstring)."""
 
     def __init__(self, case: str, knobs: dict, reference: dict | None = None, floor: dict | None = None,
                  scale: float = 1e-12, accept: float = 2.0, scheduler: str | None = "serial", workers=None,
-                 warmup: bool = True):
+                 warmup: bool | dict = True, observables=None):
         from .cases import get_case
 
         c = get_case(case)
@@ -88,7 +94,12 @@ class TradeoffStudy:
         self.case, self.knobs = case, {k: list(v) for k, v in knobs.items()}
         self.reference, self.floor = dict(reference or {}), (dict(floor) if floor else None)
         self.scale, self.accept = float(scale), float(accept)
-        self.scheduler, self.workers, self.warmup = scheduler, workers, bool(warmup)
+        self.scheduler, self.workers = scheduler, workers
+        self.warmup = dict(warmup) if isinstance(warmup, dict) else bool(warmup)
+        for k in self.warmup if isinstance(self.warmup, dict) else ():
+            if k not in c.params:
+                raise KeyError(f"case {case!r} has no parameter {k!r}; parameters: {sorted(c.params)}")
+        self.observables = [str(o) for o in observables] if observables else None
         self.table: pd.DataFrame | None = None
         self.runs: list[dict] = []
 
@@ -101,8 +112,14 @@ class TradeoffStudy:
                 jobs.append((f"{k} = {v}", k, v, dict(self.reference, **{k: v})))
         return jobs
 
+    def compared(self, obs: dict, ref: dict) -> int:
+        """How many observables a run's error is over (those of the reference it has, after the filter)."""
+        return sum(k in obs and (self.observables is None or any(o in k for o in self.observables)) for k in ref)
+
     def error(self, obs: dict, ref: dict) -> float:
         common = [k for k in ref if k in obs]
+        if self.observables is not None:
+            common = [k for k in common if any(o in k for o in self.observables)]
         if not common:
             return math.nan
         d = [abs(obs[k] - ref[k]) / max(abs(ref[k]), self.scale) for k in common]
@@ -112,7 +129,9 @@ class TradeoffStudy:
         from .sweep import run_sweep
 
         jobs = self._jobs()
-        if self.warmup:  # compile the kernels before anything is timed (serial runs share this process)
+        if isinstance(self.warmup, dict):  # compile the kernels before anything is timed (serial runs share
+            run_observed((self.case, dict(self.reference, **self.warmup)))  # this process)
+        elif self.warmup:
             run_observed((self.case, jobs[-1][3]))
         self.runs = run_sweep(run_observed, [(self.case, over) for *_, over in jobs], scheduler=self.scheduler,
                               workers=self.workers)
@@ -120,10 +139,11 @@ class TradeoffStudy:
         rows = []
         for (label, knob, value, over), r in zip(jobs, self.runs):
             rows.append(dict(run=label, knob=knob or "", value=value, error=self.error(r["observables"], ref),
-                             observables=len(r["observables"]), wall_s=r["wall_s"],
+                             observables=self.compared(r["observables"], ref), wall_s=r["wall_s"],
                              particle_steps_per_s=(r["particle_steps"] / r["wall_s"]) if r["wall_s"] > 0 else math.nan,
                              dem_s=r["dem_s"], fluid_s=r["bem_s"]))
         t = pd.DataFrame(rows)
+        t["value"] = pd.Series([r["value"] for r in rows], dtype=object)  # each knob's own type (int, float, str)
         floor = float(t.loc[t.run == "chaos floor", "error"].iloc[0]) if self.floor else 0.0
         t["error_over_floor"] = t.error / floor if floor > 0 else math.nan
         t["pareto"] = pareto_front(t.wall_s, t.error)

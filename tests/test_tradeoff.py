@@ -56,3 +56,151 @@ def test_the_cli_writes_table_and_figure(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "recommended:" in out.stdout
     assert {p.name for p in tmp_path.iterdir()} >= {"tradeoff.parquet", "tradeoff.txt", "tradeoff.png"}
+
+
+# -- study pages (issue 17 acceptance): fixed parameters, several knobs, observables, aliases
+from demflow.cases import ALIASES, CASES, get_case  # noqa: E402
+from demflow.cases.tradeoff_studies import TradeoffCase, parse_assignments, parse_knobs, typed  # noqa: E402
+
+
+def test_fixed_values_take_the_type_of_the_studied_cases_default():
+    d = dict(n_seeds=8, dt=1e-5, variants="a,b", flag=False, ensemble="1,2")
+    assert parse_assignments("n_seeds=1; dt=2.5e-6;variants=loose-saturated;flag=yes;ensemble=", d) == dict(
+        n_seeds=1, dt=2.5e-6, variants="loose-saturated", flag=True, ensemble="")
+    got = parse_assignments("n_seeds=16.0", d)
+    assert got == dict(n_seeds=16) and type(got["n_seeds"]) is int
+    assert parse_assignments("", d) == {}
+    assert parse_knobs("n_seeds=1,2;dt=1e-4,5e-5", d) == dict(n_seeds=[1, 2], dt=[1e-4, 5e-5])
+    assert typed("0", True) is False and typed(3, 1.0) == 3.0
+
+
+def test_bad_fixed_values_are_refused_with_the_parameter_list():
+    d = dict(n_seeds=8, dt=1e-5, flag=False)
+    with pytest.raises(KeyError, match="no parameter 'nseeds'.*n_seeds"):
+        parse_assignments("nseeds=1", d)
+    with pytest.raises(ValueError, match="n_seeds=.*integer"):
+        parse_assignments("n_seeds=1.5", d)
+    with pytest.raises(ValueError, match="name=value"):
+        parse_assignments("n_seeds", d)
+    with pytest.raises(ValueError, match="boolean"):
+        parse_assignments("flag=maybe", d)
+
+
+@pytest.mark.parametrize("name", ["tradeoff-cs-photoelastic", "tradeoff-thesis-falling-disc",
+                                  "tradeoff-thesis-simple-shear", "tradeoff-miyata-uniaxial-3d",
+                                  "tradeoff-thesis-impact"])
+def test_every_study_page_parses_into_a_study_of_its_case(name):
+    """Each registered study: its knobs, fixed parameters, reference and floor are parameters of the studied
+    case; resolution knobs are knobs; the reference is not one of a knob's listed values; it has a floor."""
+    case = CASES[name]
+    s = case.settings(case.merged())
+    study = case.study(case.merged())
+    params = get_case(case.study_case).params
+    assert set(s["knobs"]) | set(s["reference"]) | set(s["floor"]) <= set(params)
+    assert set(s["resolution"]) <= set(s["knobs"]) and s["resolution"]
+    for k, vals in s["knobs"].items():
+        assert s["reference"].get(k, params[k]) not in vals
+        assert all(type(v) is type(params[k]) for v in vals)
+    jobs = study._jobs()
+    assert [j[0] for j in jobs[:2]] == ["reference", "chaos floor"]
+    for _, _, _, over in jobs:  # every run carries the fixed parameters (unless it is that knob's run)
+        for k, v in s["fixed"].items():
+            assert over[k] == v or k in s["knobs"]
+
+
+def test_the_hand_made_shear_study_name_still_works():
+    assert ALIASES["thesis-simple-shear-study"] == "tradeoff-thesis-simple-shear"
+    assert get_case("thesis-simple-shear-study") is CASES["tradeoff-thesis-simple-shear"]
+    assert "thesis-simple-shear-study" not in CASES  # one page, not two
+
+
+class TinyImpactStudy(TradeoffCase):
+    name = "tiny-impact-study"
+    study_case = "thesis-impact"
+    source = "test"
+    params = dict(knob="dt", values="4e-5,1e-5", reference=2.5e-6, knobs="kn=2e7", fixed="t_end=0.05",
+                  floor_param="kn", floor_value=1.0001e7, observables="exact linear-spring", warmup="t_end=0.001")
+
+
+def test_a_tiny_study_with_fixed_parameters_two_knobs_and_an_observable_filter():
+    case = TinyImpactStudy()
+    p = case.merged()
+    run = case.run(p)
+    s = run.extras["study"]
+    t = s.table
+    assert list(t.run) == ["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "kn = 20000000.0"]
+    assert s.reference == dict(t_end=0.05, dt=2.5e-6)
+    assert (t.observables == 4).all()  # the four "vs exact linear-spring" checks of thesis-impact, not the rigid ones
+    assert 0 < s.floor_error < 1e-5 and t.error.iloc[0] == 0.0
+    checks = case.checks(run, p)
+    shrink = [c for c in checks if c.kind == "self-consistency"]
+    assert len(shrink) == 1 and shrink[0].passed and shrink[0].name.startswith("dt:")  # kn is not a resolution knob
+    infos = [c.name for c in checks if c.kind == "info"]
+    assert any(n.startswith("chaos floor: kn = 10001000.0") for n in infos)
+    assert any(n.startswith("recommended:") for n in infos)
+    (title, table), = case.tables(run, p)
+    assert "t_end = 0.05" in title and list(table.value)[:2] == ["", ""]
+
+
+def test_values_set_from_the_command_line_parse():
+    """`--set values=4e-5,1e-5` reaches merged() as a tuple, which it turns into the tuple's text."""
+    case = TinyImpactStudy()
+    p = case.merged(dict(values=(4e-5, 1e-5)))
+    assert case.settings(p)["knobs"]["dt"] == [4e-5, 1e-5]
+
+
+def test_a_resolution_knob_below_the_chaos_floor_fails_its_check_and_says_why():
+    """Errors that do not shrink are a failed self-consistency check, never loosened; when they all lie within
+    accept × the chaos floor the check (passed or failed) says the knob is not resolved above the chaos."""
+    from types import SimpleNamespace
+
+    import pandas as pd
+
+    from demflow.cases.base import CaseRun
+
+    t = pd.DataFrame(dict(run=["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "kn = 2e7"],
+                          knob=["", "", "dt", "dt", "kn"], value=[None, None, 4e-5, 1e-5, 2e7],
+                          error=[0.0, 0.03, 0.02, 0.025, 0.5], wall_s=[4.0, 4.0, 1.0, 2.0, 4.0],
+                          recommended=[False, False, True, False, False]))
+    s = SimpleNamespace(table=t, floor={"kn": 1.0001e7}, floor_error=0.03, accept=2.0, within_floor=True,
+                        recommended=t.iloc[2].to_dict())
+    case = TinyImpactStudy()
+    checks = case.checks(CaseRun(extras={"study": s}), case.merged())
+    (dt,) = [c for c in checks if c.kind == "self-consistency"]
+    assert not dt.passed and "not resolved above the chaos" in dt.name and dt.value == pytest.approx(1.25)
+    t.loc[3, "error"] = 0.015  # shrinking, but within the floor: passed, with the note
+    (dt,) = [c for c in TinyImpactStudy().checks(CaseRun(extras={"study": s}), case.merged())
+             if c.kind == "self-consistency"]
+    assert dt.passed and "not resolved above the chaos" in dt.name
+    t.loc[3, "error"] = 0.2  # above the floor and growing: failed, without the note
+    (dt,) = [c for c in TinyImpactStudy().checks(CaseRun(extras={"study": s}), case.merged())
+             if c.kind == "self-consistency"]
+    assert not dt.passed and "not resolved" not in dt.name
+
+
+def test_photoelastic_dt_fraction_keeps_the_protocol_in_time():
+    """A smaller Δt fraction runs proportionally more cycles (the walls move as far in the same time); the
+    default fraction 0.1 gives the case's own cycles and Δt. (The study's other settings, one seed without
+    Table 2/3 and engine runs, are exercised by its page: the packing alone takes 40 s to make.)"""
+    from demflow.cases.cs_photoelastic import servo_scene, servo_steps, stage_steps, strain_scene
+    from demflow.cases.photoelastic_packing import Packing
+
+    pk = Packing(x=np.array([30.0, 70.0]), y=np.array([50.0, 50.0]), r=np.array([20.0, 20.0]),
+                 box=(0.0, 100.0, 0.0, 100.0), seed=0, F0=0.0, steps=0)
+    base = get_case("cs-photoelastic").merged(dict(load_a=150, load_b=100, rest=200, servo_cycles=300))
+    fine = dict(base, dt_fraction=0.05)
+    assert stage_steps(base) == (350, 650) and servo_steps(base) == 300
+    assert stage_steps(fine) == (700, 1300) and servo_steps(fine) == 600
+    a, b = strain_scene(pk, base), strain_scene(pk, fine)
+    assert b.dt == pytest.approx(0.5 * a.dt) and (a.n_steps, b.n_steps) == (650, 1300)
+    assert servo_scene(pk, fine).n_steps == 2 * servo_scene(pk, base).n_steps == 1200
+
+
+def test_falling_disc_without_its_dt_twin_observes_velocity_and_drag():
+    case = get_case("thesis-falling-disc")
+    p = case.merged(dict(elements=16, t_end=0.002, strides="1", dt_study=0, study="16,32"))
+    run = case.run(p)
+    assert set(run.results) == {"k1"}
+    assert not any(c.name.startswith("Δt study") for c in case.checks(run, p))
+    obs = case.observables(run, p)
+    assert len(obs) == 5 and obs["v(t = 1 t_end) [cm/s]"] < obs["v(t = 0.5 t_end) [cm/s]"] < 0

@@ -16,11 +16,12 @@ from .thesis_falling_disc import FallingDisc
 from .thesis_sedimentation import Sedimentation
 from .thesis_liquefaction import Liquefaction
 from .thesis_simple_shear import SimpleShear
-from .thesis_simple_shear_study import SimpleShearStudy
+from .thesis_simple_shear_study import SimpleShearTradeoff
 from .hertz_impacts import HertzImpacts
 from .ch3_stack import DampedStack, ElasticStack
 from .conformance_3d import Conformance3D
 from .tradeoff_studies import ImpactTradeoff
+from .tradeoff_cases import FallingDiscTradeoff, MiyataUniaxialTradeoff, PhotoelasticTradeoff
 from .ch3_chain import ImpulseChain
 from .miyata_uniaxial3d import MiyataUniaxial3D
 from .miyata_uniaxial2d import MiyataUniaxial2D
@@ -32,7 +33,6 @@ CASES[FallingDisc.name] = FallingDisc()
 CASES[Sedimentation.name] = Sedimentation()
 CASES[Liquefaction.name] = Liquefaction()
 CASES[SimpleShear.name] = SimpleShear()
-CASES[SimpleShearStudy.name] = SimpleShearStudy()
 CASES[HertzImpacts.name] = HertzImpacts()
 CASES[ElasticStack.name] = ElasticStack()
 CASES[DampedStack.name] = DampedStack()
@@ -41,10 +41,16 @@ CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
 CASES[MiyataUniaxial2D.name] = MiyataUniaxial2D()
 CASES[Conformance3D.name] = Conformance3D()
 CASES[ImpactTradeoff.name] = ImpactTradeoff()
+for _study in (PhotoelasticTradeoff, FallingDiscTradeoff, SimpleShearTradeoff, MiyataUniaxialTradeoff):
+    CASES[_study.name] = _study()
+
+# names that still work for users after a case was renamed or folded into another: old → current
+ALIASES: dict[str, str] = {"thesis-simple-shear-study": SimpleShearTradeoff.name}
 CASES[StabilityMatrix.name] = StabilityMatrix()
 
 
 def get_case(name: str) -> Case:
+    name = ALIASES.get(name, name)
     if name not in CASES:
         raise KeyError(f"unknown case {name!r}; `demflow cases` lists them: {', '.join(CASES)}")
     return CASES[name]

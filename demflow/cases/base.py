@@ -7,7 +7,8 @@ of each variant, plus any extra data the checks need); ``checks`` compares with 
 reference values using tolerances from :mod:`demflow.tolerances` (informative lines are
 :meth:`Check.info`, never counted as passes or failures); ``figures`` draws what a person
 looks at.  Hooks instead of name branches: ``reference_plan`` (``demflow reference``),
-``comparison_case`` (``demflow compare``), ``tables`` and ``page_sections`` (the report page).
+``comparison_case`` (``demflow compare``), ``tables`` and ``page_sections`` (the report page),
+``observables`` (what a speed-accuracy study compares).
 """
 from __future__ import annotations
 
@@ -198,6 +199,11 @@ class Case:
     def comparison_case(self) -> Case | None:
         """A fresh case object whose ``engines`` and ``live`` the `demflow compare` command sets;
         None: the case compares no engines."""
+        return None
+
+    def observables(self, run: CaseRun, p) -> dict[str, float] | None:
+        """What a speed-accuracy study (:mod:`demflow.tradeoff`) compares between runs of this case:
+        {name: value}. None (the default): the values of the case's finite counted checks."""
         return None
 
     @staticmethod

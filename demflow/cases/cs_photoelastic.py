@@ -24,8 +24,14 @@ Lost, and assumed here (the report says so):
   eccentricity e/(L/2) instead);
 * damping: contact dashpots only, cn = 2ζ√(m kn), cs = 2ζ√(m ks), ζ = 0.1 with m the mass of an
   R = 20 disc; no global damping, so that LIGGGHTS (which has none) runs the same scene;
-* Δt = 0.1 × 2√(m_min/kn); normal force N = kn·δ (the form YADE and LIGGGHTS use; the packing
-  starts pre-stressed, where the incremental form would start from zero force).
+* Δt = 0.1 × 2√(m_min/kn) (``dt_fraction``; the cycle counts are those at 0.1: a smaller fraction
+  runs proportionally more cycles, so the walls move as far in the same time); normal force N = kn·δ
+  (the form YADE and LIGGGHTS use; the packing starts pre-stressed, where the incremental form would
+  start from zero force).
+
+``other_tables`` = 0 leaves out the Table 2 and 3 runs and the fixed-side-wall stage B (informative
+lines only); ``engine_refs`` = 0 leaves out the stored YADE and LIGGGHTS runs: both for a speed-accuracy
+study (``tradeoff-cs-photoelastic``), which also reads :meth:`Photoelastic.observables`.
 
 Stress-controlled variant (beyond C&S): the top and right walls are servo walls (thesis eqs
 5.11-5.12) with the experiment's forces, stage A F_V = ``servo_fv`` and F_H = 0.39 F_V, stage B
@@ -65,10 +71,21 @@ def laws(table: str, zeta: float):
             ("disc", "wall"): LinearLaw(kn=KN, ks=t["ks"], cn=cn, cs=cs, friction=t["mu_dw"])}
 
 
+def cycles(p, n) -> int:
+    """``n`` cycles of the protocol (counted at Δt fraction 0.1) at the run's Δt fraction: a smaller
+    fraction runs proportionally more cycles, so the walls move as far in the same time."""
+    return int(round(n * 0.1 / p.get("dt_fraction", 0.1)))
+
+
 def stage_steps(p):
     """(end of stage A, end of stage B) in cycles."""
-    a = p["load_a"] + p["rest"]
-    return a, a + p["load_b"] + p["rest"]
+    a = cycles(p, p["load_a"]) + cycles(p, p["rest"])
+    return a, a + cycles(p, p["load_b"]) + cycles(p, p["rest"])
+
+
+def servo_steps(p) -> int:
+    """Cycles of each stage of the servo variant."""
+    return cycles(p, p["servo_cycles"])
 
 
 def strain_scene(packing, p, table="table1", name=None):
@@ -80,7 +97,8 @@ def strain_scene(packing, p, table="table1", name=None):
         d = np.asarray(INWARD[w])
         va = tuple((-p["side_ratio_a"] if side else 1.0) * v * d)
         vb = tuple((-p["side_ratio_b"] if side else 1.0) * v * d)
-        phases[w] = (Phase(p["load_a"], velocity=va), Phase(p["rest"]), Phase(p["load_b"], velocity=vb), Phase(p["rest"]))
+        phases[w] = (Phase(cycles(p, p["load_a"]), velocity=va), Phase(cycles(p, p["rest"])),
+                     Phase(cycles(p, p["load_b"]), velocity=vb), Phase(cycles(p, p["rest"])))
     a, b = stage_steps(p)
     return _scene(packing, p, table, box_walls(*packing.box, phases=phases), b, (a, b),
                   name or f"photoelastic-{table}-seed{packing.seed}")
@@ -90,7 +108,7 @@ def servo_scene(packing, p, table="table1"):
     """Stress-controlled variant: top and right walls hold C&S's experimental forces."""
     fv = p["servo_fv"]
     fh = EXPERIMENT[0] * fv
-    sa = p["servo_cycles"]
+    sa = servo_steps(p)
     g, vmax = p["servo_gain"], p["speed"]
     servos = {"top": Servo(fv, INWARD["top"], g, vmax, schedule=((sa, fv * (1 + STEP_B)),)),
               "right": Servo(fh, INWARD["right"], g, vmax, schedule=((sa, fh - STEP_B * fv),))}
@@ -101,7 +119,8 @@ def servo_scene(packing, p, table="table1"):
 def _scene(packing, p, table, walls, n, snaps, name):
     return Scene(name=name, discs=Discs(x=packing.x, y=packing.y, radius=packing.r, material="disc"),
                  materials={"disc": Material(DENSITY), "wall": Material()}, laws=laws(table, p["zeta"]), walls=walls,
-                 contact_model=ContactModel(normal="overlap"), dt=0.1 * 2.0 * np.sqrt(min_mass() / KN), n_steps=n,
+                 contact_model=ContactModel(normal="overlap"), dt=p.get("dt_fraction", 0.1) * 2.0 * np.sqrt(min_mass() / KN),
+                 n_steps=n,
                  overlap_tolerance=1e-3, outputs=Outputs(every=p["every"], snapshots=tuple(snaps)),
                  description=f"C&S photoelastic test, {table}, packing seed {packing.seed}",
                  # Δt = 0.1 × 2√(m_min/kN) is 1.35-1.66× the safe estimate (integrate.safe_time_step: six
@@ -202,13 +221,14 @@ class Photoelastic(Case):
         "Strain path: stage A top/bottom walls in at `speed`, side walls out at side_ratio_a × speed for load_a cycles; "
         "stage B the same with side_ratio_b for load_b cycles; `rest` cycles at rest after each. Walls do not rotate.",
         "Contact dashpots ζ = 0.1 (m of an R = 20 disc), no global damping (so LIGGGHTS runs the same scene); "
-        "Δt = 0.1 × 2√(m_min/kn); N = kn·δ.",
+        "Δt = dt_fraction × 2√(m_min/kn), dt_fraction = 0.1 (cycle counts scale with 0.1/dt_fraction); N = kn·δ.",
         "Servo variant: top and right walls are servo walls (eqs 5.11-5.12) at the experiment's forces; bottom and "
         "left fixed; the ratio is that of the servo walls' contact reactions averaged over the last quarter of a stage.",
         "Seed band: 95 % prediction interval over n_seeds packings (t distribution); engines judged against it.",
     )
     params = dict(seed=1, n_seeds=8, speed=0.05, side_ratio_a=0.6, load_a=1800, side_ratio_b=1.5, load_b=1200,
-                  rest=8000, zeta=0.1, every=100, servo_fv=5e8, servo_gain=0.5, servo_cycles=20000)
+                  rest=8000, zeta=0.1, every=100, servo_fv=5e8, servo_gain=0.5, servo_cycles=20000, dt_fraction=0.1,
+                  other_tables=1, engine_refs=1)
     engines = ("yade", "liggghts")
     live = False
 
@@ -233,19 +253,21 @@ class Photoelastic(Case):
                 out["demflow"] = res
         pk = out["packings"][p["seed"]]
         out["tables"] = {}
-        for t in ("table2", "table3"):
-            res = build(strain_scene(pk, p, t)).run().results()
-            out["tables"][t] = {st: stage_statistics(res, s, len(pk.x)) for st, s in (("A", a), ("B", b))}
+        out["fixed_sides_B"] = None
+        if p["other_tables"]:
+            for t in ("table2", "table3"):
+                res = build(strain_scene(pk, p, t)).run().results()
+                out["tables"][t] = {st: stage_statistics(res, s, len(pk.x)) for st, s in (("A", a), ("B", b))}
+            # how much the stage-B band discriminates: the same run with the side walls fixed in stage B
+            res = build(strain_scene(pk, dict(p, side_ratio_b=0.0), name=f"photoelastic-fixed-sides-seed{pk.seed}")
+                        ).run().results()
+            out["fixed_sides_B"] = stage_statistics(res, b, len(pk.x))["F_H/F_V"]
         out["tables"]["table1"] = out["seeds"][p["seed"]]
-        # how much the stage-B band discriminates: the same run with the side walls fixed in stage B
-        res = build(strain_scene(pk, dict(p, side_ratio_b=0.0), name=f"photoelastic-fixed-sides-seed{pk.seed}")
-                    ).run().results()
-        out["fixed_sides_B"] = stage_statistics(res, b, len(pk.x))["F_H/F_V"]
         res = build(servo_scene(pk, p)).run().results()
         out["servo"] = res
         out["servo_stats"] = {st: stage_statistics(res, s, len(pk.x))
-                              for st, s in (("A", p["servo_cycles"]), ("B", 2 * p["servo_cycles"]))}
-        out["engines"] = self._engines(p, pk)
+                              for st, s in (("A", servo_steps(p)), ("B", 2 * servo_steps(p)))}
+        out["engines"] = self._engines(p, pk) if p["engine_refs"] else {}
         out["engine_stats"] = {e: {st: stage_statistics(res, s, len(pk.x)) for st, s in (("A", a), ("B", b))}
                                for e, res in out["engines"].items()}
         return CaseRun({k: out.pop(k) for k in ("demflow", "servo")}, out)
@@ -271,7 +293,9 @@ class Photoelastic(Case):
             elif e in stored:
                 res = reference.load(self.name, f"seed{p['seed']}", e)
                 made = res.meta.get("params")
-                if made is not None and {k: made.get(k) for k in ENGINE_PARAMS} != {k: p[k] for k in ENGINE_PARAMS}:
+                # a reference stored before a parameter existed was made with its default
+                if made is not None and ({k: made.get(k, self.params[k]) for k in ENGINE_PARAMS}
+                                         != {k: p[k] for k in ENGINE_PARAMS}):
                     raise ValueError(f"stored reference {self.name}/seed{p['seed']}/{e} was made with other parameters; "
                                      f"regenerate it (demflow reference {self.name} --engine {e}) or use the defaults")
                 _same_packing(reference.location(self.name, f"seed{p['seed']}", e), pk)
@@ -313,19 +337,20 @@ class Photoelastic(Case):
             "lost, and the reconstruction's is too mild to move the ratio by C&S's −0.03 reliably (see the stage-B "
             "force above).", relative=False))
         fixed = run.extras["fixed_sides_B"]
-        out.append(Check.info(
-            f"stage B band [0.33, 0.47] with the side walls fixed in stage B (seed {p['seed']}): F_H/F_V", fixed, src,
-            f"How much the stage-B band says: with the side walls not moving at all in stage B the ratio is "
-            f"{fixed:.3f}, {'inside' if 0.33 <= fixed <= 0.47 else 'outside'} the band, so a stage-B pass "
-            f"{'does not show that the strain path is right' if 0.33 <= fixed <= 0.47 else 'depends on the side walls moving'}."))
-        for t in ("table2", "table3"):
+        if fixed is not None:
+            out.append(Check.info(
+                f"stage B band [0.33, 0.47] with the side walls fixed in stage B (seed {p['seed']}): F_H/F_V", fixed, src,
+                f"How much the stage-B band says: with the side walls not moving at all in stage B the ratio is "
+                f"{fixed:.3f}, {'inside' if 0.33 <= fixed <= 0.47 else 'outside'} the band, so a stage-B pass "
+                f"{'does not show that the strain path is right' if 0.33 <= fixed <= 0.47 else 'depends on the side walls moving'}."))
+        for t in (t for t in ("table2", "table3") if t in run.extras["tables"]):
             for stage in ("A", "B"):
                 r = run.extras["tables"][t][stage]["F_H/F_V"]
                 out.append(Check.info(f"{t} seed {p['seed']}, stage {stage}: F_H/F_V (C&S {CS_RATIOS[t]['AB'.index(stage)]})",
                                       r, src, "Information: C&S's ratio for this parameter set, other packing"))
         # stress-controlled
         sv = run.results["servo"].wall_forces
-        sa = p["servo_cycles"]
+        sa = servo_steps(p)
         targets = {"A": EXPERIMENT[0], "B": (EXPERIMENT[0] - STEP_B) / (1 + STEP_B)}
         for stage, (s0, s1) in (("A", (0.75 * sa, sa)), ("B", (1.75 * sa, 2 * sa))):
             out.append(Check.against(f"servo, stage {stage}: the servo walls' own force ratio (right over top, the "
@@ -346,7 +371,7 @@ class Photoelastic(Case):
             out.append(Check.against(f"servo, stage {stage}: ΔF/F below 3 %", run.extras["servo_stats"][stage]["ΔF/F"], 0.0,
                                      "photoelastic.equilibrium", src))
         # engines vs demflow, judged against the seed band
-        bands = seed_bands(run)
+        bands = seed_bands(run) if run.extras["engine_stats"] else None
         ref = run.extras["seeds"][p["seed"]]
         for e, per_stage in run.extras["engine_stats"].items():
             for stage, st in per_stage.items():
@@ -359,6 +384,25 @@ class Photoelastic(Case):
                 out.append(Check.condition(f"{e}, stage {stage}: q-model N = {N:.3g} inside demflow's seed band "
                                            f"[{lo:.3g}, {hi:.3g}]", lo <= N <= hi, N, src,
                                            "Acceptance: engine difference judged against the seed-to-seed band", kind="cross-code"))
+        return out
+
+    def observables(self, run, p):
+        """For a speed-accuracy study: on the first seed's strain-controlled run, per stage, F_H/F_V, the mean
+        vertical wall force F_V, z without rattlers, the fabric anisotropy and the q-model N; on the servo
+        variant, per stage, the servo walls' held ratio and the assembly's F_H/F_V."""
+        out = {}
+        st = run.extras["seeds"][p["seed"]]
+        for stage in ("A", "B"):
+            w = st[stage]["walls"]
+            out[f"stage {stage}: F_H/F_V"] = st[stage]["F_H/F_V"]
+            out[f"stage {stage}: F_V"] = 0.5 * (abs(w.loc["bottom", "F2"]) + abs(w.loc["top", "F2"]))
+            for k in ("z (no rattlers)", "fabric anisotropy", "q-model N"):
+                out[f"stage {stage}: {k}"] = float(st[stage][k])
+        sa = servo_steps(p)
+        wf = run.results["servo"].wall_forces
+        for stage, (s0, s1) in (("A", (0.75 * sa, sa)), ("B", (1.75 * sa, 2 * sa))):
+            out[f"servo, stage {stage}: servo walls' ratio"] = servo_ratio(wf, s0, s1)
+            out[f"servo, stage {stage}: assembly F_H/F_V"] = run.extras["servo_stats"][stage]["F_H/F_V"]
         return out
 
     def tables(self, run, p):
@@ -383,7 +427,8 @@ def reference_scene(variant: str, p: dict):
     return strain_scene(random_packing(seed), dict(p, seed=seed))
 
 
-ENGINE_PARAMS = ("seed", "speed", "side_ratio_a", "load_a", "side_ratio_b", "load_b", "rest", "zeta", "every")
+ENGINE_PARAMS = ("seed", "speed", "side_ratio_a", "load_a", "side_ratio_b", "load_b", "rest", "zeta", "every",
+                 "dt_fraction")
 
 
 def _same_packing(path, pk):
@@ -457,7 +502,7 @@ def photoelastic_figures(run, p, outdir):
             r = force_ratio(wall_table(res.contacts[res.contacts.step == step]))
             axs[row, col].set_title(f"{e}, stage {stage}: F_H/F_V = {r:.3f}", fontsize=9)
         sv = run.results["servo"]
-        s = p["servo_cycles"] * (1 if stage == "A" else 2)
+        s = servo_steps(p) * (1 if stage == "A" else 2)
         _diagram(sv, s, axs[row, -1])
         w = wall_table(sv.contacts[sv.contacts.step == s])
         r = abs(w.loc["right", "F1"] / w.loc["top", "F2"])
@@ -500,8 +545,8 @@ def photoelastic_figures(run, p, outdir):
     top = wf[wf.wall == "top"]
     right = wf[wf.wall == "right"]
     ax.plot(top.step, np.abs(right.fx.to_numpy()) / np.maximum(np.abs(top.fy.to_numpy()), 1e-30), lw=1)
-    for (s0, s1), tgt in (((0, p["servo_cycles"]), EXPERIMENT[0]),
-                          ((p["servo_cycles"], 2 * p["servo_cycles"]), (EXPERIMENT[0] - STEP_B) / (1 + STEP_B))):
+    sa = servo_steps(p)
+    for (s0, s1), tgt in (((0, sa), EXPERIMENT[0]), ((sa, 2 * sa), (EXPERIMENT[0] - STEP_B) / (1 + STEP_B))):
         ax.hlines(tgt, s0, s1, colors="k", linestyles="--")
     ax.set_ylim(0, 1)
     ax.set_xlabel("cycles")

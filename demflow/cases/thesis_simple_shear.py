@@ -6,7 +6,7 @@ vertical force F_y (volume changes).  Saturated shear: wall 3 is fixed (constant
 unbalanced load F_y − F_C is handed to the liquid (μ = 0.01, water) as a traction on wall 3 (thesis
 §5.3.2); the pore pressure along every wall is the BEM's.
 
-Speed knobs (measured, see ``thesis-simple-shear-study``): the shear rate γ̇ (not given in the
+Speed knobs (measured, see ``tradeoff-thesis-simple-shear``): the shear rate γ̇ (not given in the
 thesis; 0.05 /s is converged for the dry runs: γ̇ = 0.02 changes the height curve by < 0.02 % of H),
 the density scaling of the saturated shear (thesis §5.5.3.1: the run is quasi-static, a denser disc
 allows a larger Δt and, since the drag relaxation time m/K grows with m, a longer fluid stride), the
@@ -141,7 +141,7 @@ class SimpleShear(Case):
         "Saturated: minimum fluid gap 0.005 cm (0.1 × the smallest radius: the thesis's gap for this case is not "
         "given; it notes the fluid forces came out small, 'either the gap is too big or the viscosity too small'); "
         "fluid moments not applied; density scaled ×100 in the saturated shear (quasi-static, §5.5.3.1), error "
-        "measured by thesis-simple-shear-study.",
+        "measured by tradeoff-thesis-simple-shear.",
     )
     params = dict(seed=1, rate=0.05, gamma_max=0.105, density_scale=1.0, sat_density_scale=100.0, elements=16,
                   element_length=0.05, min_gap=0.005, stride=1_000_000, safety=0.5, variants=",".join(VARIANTS),
@@ -247,6 +247,27 @@ class SimpleShear(Case):
                         "Thesis Fig. 5.48: 'a steady decrease of pore pressure after an initial increase'.", kind="source"))
                 out.append(Check.against(f"{v}: walls 1 and 3 carry the same pore pressure (median |p1 − p3| / (F_y/W))",
                                          b["p13"], 0.0, "simple-shear.incompressible", SRC))
+        return out
+
+    def observables(self, run, p):
+        """For a speed-accuracy study: per saturated variant, the mean pore pressure on walls 1 and 3 [F_y/W]
+        and the shear force S [F_y] at 12 equally spaced strains up to γ_max (interpolated); per dry variant,
+        the height change [% of H] and S [F_y] there."""
+        grid = np.linspace(0.0, float(p["gamma_max"]), 13)[1:]
+        out = {}
+        for v, res in run.results.items():
+            m = res.meta
+            c = curves(res)
+            if m["saturated"]:
+                pr = pressures(res)
+                first = np.interp(grid, pr.gamma, 0.5 * (pr.p1 + pr.p3) / (m["fy"] / m["width"]))
+                what = "p [F_y/W]"
+            else:
+                first, what = np.interp(grid, c.gamma, c.dh), "dh [% of H]"
+            S = np.interp(grid, c.gamma, c.S / m["fy"])
+            for g, a, b in zip(grid, first, S):
+                out[f"{v}: {what} at γ = {100 * g:.2f} %"] = float(a)
+                out[f"{v}: S [F_y] at γ = {100 * g:.2f} %"] = float(b)
         return out
 
     def tables(self, run, p):

@@ -2,30 +2,129 @@
 case of its own, so `demflow validate` draws its error-vs-cost figure with the Pareto front and the
 recommended setting, and shows the knob table.
 
-Each study's checks are self-consistency: along a resolution knob (Δt) the error must shrink toward
-the reference (a knob whose error does not shrink is not what limits the result, or the study is
-wrong), and the recommended setting is reported with its error and cost (informative).
+A study's ``params`` are text, so that `--set` can change them:
+
+- ``knob``, ``values`` (comma-separated, coarse to fine), ``reference``: the main knob, its values and
+  its value in the reference run;
+- ``knobs``: more knobs, ``"name=v1,v2;name2=w1,w2"`` (their reference values are those of ``fixed``,
+  else the studied case's defaults);
+- ``fixed``: parameters of the studied case set in every run, ``"name=value;name=value"`` (one seed
+  instead of eight, a shorter run: what makes a study affordable);
+- ``floor_param``, ``floor_value``: the chaos floor, one parameter set on top of the reference;
+- optional: ``resolution`` (the knobs whose values run coarse to fine toward the reference: their
+  error must shrink; default the main knob when the class says ``knob_is_resolution``),
+  ``observables`` (keep the observables whose names contain one of these ``;``-separated strings),
+  ``scale`` (the smallest reference magnitude a relative error divides by), ``warmup`` ("last": the
+  last knob run compiles the kernels untimed; "none"; or ``"name=value;..."``: a cheap run, the
+  reference with these overrides).
+
+Every value is converted to the type of the studied case's default (:func:`parse_assignments`).
+Each study's checks are self-consistency: along a resolution knob the error must shrink toward the
+reference at every refinement (a knob whose error does not shrink is not what limits the result, or
+the study is wrong: it shows as a failed check; a check whose errors all lie within ``accept`` × the
+chaos floor says so, passed or failed); the chaos floor and the recommended setting are reported
+(informative).
 """
 from __future__ import annotations
 
 from .base import Case, CaseRun, Check
 
 
+def typed(text, default):
+    """``text`` converted to the type of ``default`` (bool from 1/0/true/false/yes/no; an int from
+    "16" or "16.0"; a float; None or a str default: the text itself)."""
+    if not isinstance(text, str):
+        text = str(text)
+    s = text.strip()
+    if isinstance(default, bool):
+        low = s.lower()
+        if low in ("1", "true", "yes", "on"):
+            return True
+        if low in ("0", "false", "no", "off"):
+            return False
+        raise ValueError(f"{text!r}: expected a boolean (1/0, true/false, yes/no)")
+    if isinstance(default, int):
+        f = float(s)
+        if not f.is_integer():
+            raise ValueError(f"{text!r}: expected an integer (the default is {default!r})")
+        return int(f)
+    if isinstance(default, float):
+        return float(s)
+    return s
+
+
+def parse_assignments(text: str, defaults: dict, what: str = "fixed") -> dict:
+    """``"name=value;name=value"`` → {name: value}, each value converted to the type of ``defaults[name]``
+    (the studied case's parameters); an unknown name or a value of the wrong type is refused with the
+    case's parameter list."""
+    out = {}
+    for item in str(text or "").split(";"):
+        if not item.strip():
+            continue
+        if "=" not in item:
+            raise ValueError(f"{what}={text!r}: write name=value;name=value (got {item.strip()!r})")
+        k, v = (x.strip() for x in item.split("=", 1))
+        if k not in defaults:
+            raise KeyError(f"{what}: the studied case has no parameter {k!r}; parameters: {sorted(defaults)}")
+        try:
+            out[k] = typed(v, defaults[k])
+        except ValueError as e:
+            raise ValueError(f"{what}: {k}={e.args[0]}") from None
+    return out
+
+
+def parse_knobs(text: str, defaults: dict) -> dict:
+    """``"name=v1,v2;name2=w1,w2"`` → {name: [v1, v2], ...}, typed as :func:`parse_assignments`."""
+    out = {}
+    for item in str(text or "").split(";"):
+        if not item.strip():
+            continue
+        if "=" not in item:
+            raise ValueError(f"knobs={text!r}: write name=v1,v2;name2=w1,w2 (got {item.strip()!r})")
+        k, vals = (x.strip() for x in item.split("=", 1))
+        if k not in defaults:
+            raise KeyError(f"knobs: the studied case has no parameter {k!r}; parameters: {sorted(defaults)}")
+        out[k] = [typed(v, defaults[k]) for v in vals.split(",") if v.strip()]
+    return out
+
+
 class TradeoffCase(Case):
-    """A study of ``study_case`` (see the module docstring); ``params`` hold the knob values as text so
-    `--set` can change them: knob (one parameter), values (comma-separated, coarse to fine), reference
-    (the reference value of the knob), floor_param/floor_value (the chaos-floor change)."""
+    """A study of ``study_case`` (see the module docstring)."""
 
     study_case = ""
-    knob_is_resolution = True  # coarse → fine along the listed values: the error must shrink
+    knob_is_resolution = True  # coarse → fine along the main knob's values: the error must shrink
+
+    def settings(self, p) -> dict:
+        """The study's settings parsed from its text params: knobs, reference, floor, fixed, observables,
+        resolution knobs, scale, warmup."""
+        from . import get_case
+
+        d = get_case(self.study_case).params
+        fixed = parse_assignments(p.get("fixed", ""), d, "fixed")
+        # `--set values=1e-5,5e-6` arrives as the text of a tuple: "(1e-05, 5e-06)"
+        values = str(p["values"]).strip().strip("()[]")
+        knobs = {p["knob"]: [typed(v, d[p["knob"]]) for v in values.split(",") if v.strip()]}
+        knobs.update(parse_knobs(p.get("knobs", ""), d))
+        reference = dict(fixed, **{p["knob"]: typed(p["reference"], d[p["knob"]])})
+        floor = {p["floor_param"]: typed(p["floor_value"], d[p["floor_param"]])} if p.get("floor_param") else None
+        res = p.get("resolution")
+        resolution = ([p["knob"]] if self.knob_is_resolution else []) if res is None else \
+            [k.strip() for k in str(res).split(",") if k.strip()]
+        unknown = [k for k in resolution if k not in knobs]
+        if unknown:
+            raise KeyError(f"resolution: {unknown} are not knobs of this study ({sorted(knobs)})")
+        obs = [o.strip() for o in str(p.get("observables", "")).split(";") if o.strip()] or None
+        w = str(p.get("warmup", "last")).strip()
+        warmup = True if w in ("last", "") else False if w == "none" else parse_assignments(w, d, "warmup")
+        return dict(knobs=knobs, reference=reference, floor=floor, fixed=fixed, resolution=resolution,
+                    observables=obs, scale=float(p.get("scale", 1e-12)), warmup=warmup)
 
     def study(self, p):
         from ..tradeoff import TradeoffStudy
 
-        vals = [float(v) for v in str(p["values"]).split(",") if v.strip()]
-        floor = {p["floor_param"]: float(p["floor_value"])} if p["floor_param"] else None
-        return TradeoffStudy(self.study_case, {p["knob"]: vals}, reference={p["knob"]: float(p["reference"])},
-                             floor=floor)
+        s = self.settings(p)
+        return TradeoffStudy(self.study_case, s["knobs"], reference=s["reference"], floor=s["floor"], scale=s["scale"],
+                             warmup=s["warmup"], observables=s["observables"])
 
     def run(self, p) -> CaseRun:
         s = self.study(p).compute()
@@ -34,16 +133,30 @@ class TradeoffCase(Case):
     def checks(self, run, p):
         s = run.extras["study"]
         t = s.table
-        k = t[t.knob == p["knob"]]
         out = []
-        if self.knob_is_resolution and len(k) >= 2:
+        for knob in self.settings(p)["resolution"]:
+            k = t[t.knob == knob]
+            if len(k) < 2:
+                continue
             errs = k.error.to_numpy()
             shrinking = bool(all(b < a for a, b in zip(errs, errs[1:])))
+            note = ""
+            if s.floor_error > 0 and bool((errs <= s.accept * s.floor_error).all()):
+                note = (f"; every error is within {s.accept:g} × the chaos floor {s.floor_error:.3g}: this knob's "
+                        "effect is not resolved above the chaos")
             out.append(Check.condition(
-                f"{p['knob']}: the error shrinks toward the reference at every refinement ({', '.join(map(str, k.value))};"
-                f" value: finest error / coarsest)", shrinking, errs[-1] / errs[0] if errs[0] > 0 else 0.0, self.source,
+                f"{knob}: the error shrinks toward the reference at every refinement ({', '.join(map(str, k.value))};"
+                f" errors {', '.join(f'{e:.3g}' for e in errs)}{note}; value: finest error / coarsest)", shrinking,
+                errs[-1] / errs[0] if errs[0] > 0 else 0.0, self.source,
                 "Convergence: a resolution knob whose error does not fall as it approaches the reference is not "
-                "measured by this study.", kind="self-consistency"))
+                "measured by this study (its effect is below the chaos floor, or the reference is not fine enough).",
+                kind="self-consistency"))
+        if s.floor:
+            fl = t[t.run == "chaos floor"].iloc[0]
+            out.append(Check.info(f"chaos floor: {', '.join(f'{k} = {v}' for k, v in s.floor.items())} on top of the "
+                                  f"reference (error {s.floor_error:.3g}, {fl.wall_s:.3g} s)", s.floor_error,
+                                  self.source, "How far a physically irrelevant change moves the observables: a knob's "
+                                  "error is only meaningful above it."))
         rec = s.recommended
         why = (f"the cheapest within {s.accept:g} × the chaos floor {s.floor_error:.3g}" if s.within_floor else
                f"none is within {s.accept:g} × the chaos floor {s.floor_error:.3g}: the most accurate")
@@ -53,8 +166,11 @@ class TradeoffCase(Case):
         return out
 
     def tables(self, run, p):
-        t = run.extras["study"].table
-        return [("Knob table: error (rms relative, vs the reference run) and cost", t)]
+        s = run.extras["study"]
+        t = s.table.copy()
+        t["value"] = t.value.astype(str).where(t.knob != "", "")
+        ref = ", ".join(f"{k} = {v}" for k, v in s.reference.items())
+        return [(f"Knob table: error (rms relative, vs the reference run: {ref}) and cost", t)]
 
     def figures(self, run, p, outdir):
         import matplotlib.pyplot as plt
@@ -76,4 +192,4 @@ class ImpactTradeoff(TradeoffCase):
     params = dict(knob="dt", values="4e-5,2e-5,1e-5,5e-6", reference=1e-6, floor_param="kn", floor_value=1.0001e7)
 
 
-__all__ = ["TradeoffCase", "ImpactTradeoff"]
+__all__ = ["TradeoffCase", "ImpactTradeoff", "parse_assignments", "parse_knobs", "typed"]
