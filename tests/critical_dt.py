@@ -78,19 +78,25 @@ def is_unstable(packing, dt: float, n_steps: int = 3000, **kw) -> bool:
     stops with BlowUpError or non-finite values)."""
     import warnings
 
-    from demflow import BlowUpError
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sim = build(scene(packing, dt, n_steps=n_steps, **kw))
-    e0 = kinetic(sim)
-    chunk = 250  # stop as soon as it has grown: an unstable run soon moves discs far (slow neighbour rebuilds)
+    return grows(sim, kinetic, n_steps)
+
+
+def grows(sim, kinetic_energy, n_steps: int, chunk: int = 250) -> bool:
+    """True when ``kinetic_energy(sim)`` grows beyond GROWTH × its start within ``n_steps`` steps, or the run
+    stops with BlowUpError or non-finite values; checked every ``chunk`` steps, so an unstable run stops as
+    soon as it has grown (it soon moves particles far: slow neighbour rebuilds)."""
+    from demflow import BlowUpError
+
+    e0 = kinetic_energy(sim)
     for _ in range(0, n_steps, chunk):
         try:
             sim.run(chunk)
         except BlowUpError:
             return True
-        e1 = kinetic(sim)
+        e1 = kinetic_energy(sim)
         if not (math.isfinite(e1) and e1 < GROWTH * e0):
             return True
     return False
@@ -98,10 +104,15 @@ def is_unstable(packing, dt: float, n_steps: int = 3000, **kw) -> bool:
 
 def measured_critical_dt(packing, lo: float, hi: float, rel: float = 2e-3, **kw) -> float:
     """The largest stable Δt, bisected between a stable ``lo`` and an unstable ``hi`` to ``rel``."""
-    assert not is_unstable(packing, lo, **kw) and is_unstable(packing, hi, **kw), (lo, hi)
+    return bisect_stable(lambda dt: is_unstable(packing, dt, **kw), lo, hi, rel)
+
+
+def bisect_stable(unstable, lo: float, hi: float, rel: float) -> float:
+    """The largest Δt with ``unstable(Δt)`` false, bisected between a stable ``lo`` and an unstable ``hi``."""
+    assert not unstable(lo) and unstable(hi), (lo, hi)
     while hi - lo > rel * lo:
         mid = 0.5 * (lo + hi)
-        if is_unstable(packing, mid, **kw):
+        if unstable(mid):
             hi = mid
         else:
             lo = mid

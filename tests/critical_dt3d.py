@@ -14,12 +14,12 @@ import warnings
 
 import numpy as np
 
-from demflow import BlowUpError, Box, HertzMindlinLaw, Material, Outputs3D, Plane, Scene3D, Spheres, build
+from critical_dt import GROWTH, bisect_stable, grows  # noqa: F401
+from demflow import Box, HertzMindlinLaw, Material, Outputs3D, Plane, Scene3D, Spheres, build
 
 R = 0.01
 E, NU, RHO = 7e10, 0.2, 2650.0
 PERTURBATION = 1e-6  # [length/time]: displacements far below the pre-compression
-GROWTH = 100.0
 
 
 def fcc(nx: int = 6, ny: int = 6, layers: int = 3, overlap: float = 0.01, friction: float = 0.5,
@@ -64,24 +64,8 @@ def is_unstable(dt: float, n_steps: int = 3000, **kw) -> bool:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sim = build(fcc(dt=dt, allow_supercritical=True, **kw))
-    e0 = kinetic(sim)
-    for _ in range(0, n_steps, 250):
-        try:
-            sim.run(250)
-        except BlowUpError:
-            return True
-        e1 = kinetic(sim)
-        if not (math.isfinite(e1) and e1 < GROWTH * e0):
-            return True
-    return False
+    return grows(sim, kinetic, n_steps)
 
 
 def measured_critical_dt(lo: float, hi: float, rel: float = 5e-3, **kw) -> float:
-    assert not is_unstable(lo, **kw) and is_unstable(hi, **kw), (lo, hi)
-    while hi - lo > rel * lo:
-        mid = 0.5 * (lo + hi)
-        if is_unstable(mid, **kw):
-            hi = mid
-        else:
-            lo = mid
-    return lo
+    return bisect_stable(lambda dt: is_unstable(dt, **kw), lo, hi, rel)
