@@ -237,3 +237,48 @@ def test_every_check_built_in_demflow_names_its_kind():
                 if (direct or cond) and "kind" not in {k.arg for k in n.keywords}:
                     missing.append(f"{f.name}:{n.lineno}")
     assert not missing, f"checks without a kind: {missing}; pass kind= (demflow/tolerances.py lists the kinds)"
+
+
+# -- the validate runner: a case that raises is a failed entry; entries written meanwhile are kept
+class _Broken(Case):
+    name = "thesis-one-disc"
+    title = "broken"
+    source = "test"
+
+    def run(self, p):
+        raise RuntimeError("boom: the scene could not be built")
+
+
+class _Writes(Case):
+    """A case that, while it runs, has another run store an entry for thesis-impact on disk."""
+    name = "thesis-five-discs"
+    title = "writes"
+    source = "test"
+
+    def __init__(self, outdir):
+        self.outdir = outdir
+
+    def run(self, p):
+        import json
+
+        f = self.outdir / "summary.json"
+        d = json.loads(f.read_text())
+        d["cases"]["thesis-impact"] = dict(d["cases"]["thesis-one-disc"], title="stored meanwhile")
+        f.write_text(json.dumps(d))
+        return CaseRun()
+
+    def checks(self, run, p):
+        return [Check("ok", 1.0, 1.0, 1e-3, "s", "w", kind="exact")]
+
+
+def test_validate_keeps_going_past_a_broken_case_and_keeps_entries_stored_meanwhile(tmp_path):
+    from demflow.report import run_validation
+
+    out = tmp_path / "v"
+    s = run_validation(["thesis-one-disc", "thesis-five-discs"], str(out),
+                       cases={"thesis-one-disc": _Broken(), "thesis-five-discs": _Writes(out)})
+    broken = s["cases"]["thesis-one-disc"]
+    assert broken["passed"] is False and "boom" in broken["checks"][0]["why"]
+    assert s["cases"]["thesis-five-discs"]["passed"] is True
+    assert s["cases"]["thesis-impact"]["title"] == "stored meanwhile"
+    assert "boom" in (out / "thesis-one-disc" / "index.html").read_text()

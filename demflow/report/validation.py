@@ -78,38 +78,63 @@ def run_validation(names=None, outdir="reports/validation", overrides=None, case
     outdir = Path(outdir)
     names = list(names or [n for n, c in CASES.items() if include_slow or not c.slow])
     cases = dict(CASES, **(cases or {}))
-    old = {}
-    if (outdir / "summary.json").exists():
-        try:
-            old = json.loads((outdir / "summary.json").read_text()).get("cases", {})
-        except json.JSONDecodeError:
-            old = {}
     summary = dict(generated=time.strftime("%Y-%m-%d %H:%M:%S"), python=platform.python_version(),
-                   machine=platform.machine(), cases={k: v for k, v in old.items() if k in CASES and k not in names})
+                   machine=platform.machine(), cases={})
+    done = {}
     for name in progress.iterate(names, "validate", "case"):
         case = cases[name]
         p = case.merged((overrides or {}).get(name))
-        t0 = time.perf_counter()
-        run = case.run(p)
-        wall = time.perf_counter() - t0
-        checks = case.checks(run, p)
-        casedir = outdir / name
-        casedir.mkdir(parents=True, exist_ok=True)
-        figs = [Path(f).name for f in case.figures(run, p, str(casedir))]
-        tables = [dict(title=t, html=df.to_html(float_format=lambda v: f"{v:.4g}", border=0))
-                  for t, df in case.tables(run, p)]
-        physics = {v: describe(r.meta["physics"]) for v, r in run.results.items()
-                   if isinstance(getattr(r, "meta", None), dict) and r.meta.get("physics")}
-        summary["cases"][name] = dict(physics=physics,
-            run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title, source=case.source,
-            params=p, wall_time_s=round(wall, 3), tables=tables,
-            passed=all(c.passed for c in counted(checks)), assumptions=list(case.assumptions), figures=figs,
-            counts=kind_counts(checks),
-            checks=[dict(name=c.name, value=c.value, reference=c.reference, error=c.error,
-                         tolerance=c.tolerance, passed=c.passed, source=c.source, why=c.why,
-                         relative=c.relative, kind=c.kind) for c in checks])
-    write_report(summary, outdir)
+        try:
+            done[name] = _run_case(case, p, outdir / name)
+        except Exception as e:  # one case that cannot run is a failed entry, not a lost report
+            done[name] = _failed_entry(case, p, e)
+        # the cases not run now keep the entry the summary on disk has at this moment (another run may
+        # have refreshed some), and the report is written after every case: nothing done is lost
+        summary["cases"] = {k: v for k, v in _stored_cases(outdir).items() if k in CASES and k not in done}
+        summary["cases"].update(done)
+        write_report(summary, outdir)
     return summary
+
+
+def _stored_cases(outdir: Path) -> dict:
+    if (outdir / "summary.json").exists():
+        try:
+            return json.loads((outdir / "summary.json").read_text()).get("cases", {})
+        except json.JSONDecodeError:
+            return {}
+    return {}
+
+
+def _run_case(case, p, casedir: Path) -> dict:
+    """Run one case and return its summary entry (figures written to ``casedir``)."""
+    t0 = time.perf_counter()
+    run = case.run(p)
+    wall = time.perf_counter() - t0
+    checks = case.checks(run, p)
+    casedir.mkdir(parents=True, exist_ok=True)
+    figs = [Path(f).name for f in case.figures(run, p, str(casedir))]
+    tables = [dict(title=t, html=df.to_html(float_format=lambda v: f"{v:.4g}", border=0))
+              for t, df in case.tables(run, p)]
+    physics = {v: describe(r.meta["physics"]) for v, r in run.results.items()
+               if isinstance(getattr(r, "meta", None), dict) and r.meta.get("physics")}
+    return dict(physics=physics,
+                run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title, source=case.source,
+                params=p, wall_time_s=round(wall, 3), tables=tables,
+                passed=all(c.passed for c in counted(checks)), assumptions=list(case.assumptions), figures=figs,
+                counts=kind_counts(checks),
+                checks=[dict(name=c.name, value=c.value, reference=c.reference, error=c.error,
+                             tolerance=c.tolerance, passed=c.passed, source=c.source, why=c.why,
+                             relative=c.relative, kind=c.kind) for c in checks])
+
+
+def _failed_entry(case, p, err: Exception) -> dict:
+    """The entry of a case whose run raised: one failed check that names the error."""
+    why = f"{type(err).__name__}: {err}"
+    check = dict(name="the case runs to completion", value=0.0, reference=1.0, error=1.0, tolerance=0.0,
+                 passed=False, source=case.source, why=why[:2000], relative=False, kind="self-consistency")
+    return dict(physics={}, run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title,
+                source=case.source, params=p, wall_time_s=0.0, tables=[], passed=False,
+                assumptions=list(case.assumptions), figures=[], counts=kind_counts([check]), checks=[check])
 
 
 def _fmt(v):
