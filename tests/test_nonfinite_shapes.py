@@ -194,3 +194,52 @@ def test_ell_nan_in_a_law_output_is_a_blowup(monkeypatch):
     sim.law_params.Estar[:] = math.nan
     err = _blows_up(sim, match=r"blew up at step 61: (spheres|bodies)\.\w+\[0, \d\] = nan is not finite")
     assert _ell_last_good_is_loadable(err) == 60
+
+
+# ---------------------------------------------------------------------------- 3D spheres (the same guarantees)
+def _spheres():
+    """A sphere resting on a floor (a contact from the first steps) and one in free flight."""
+    from demflow import Spheres
+
+    return Scene3D(
+        name="nonfinite-sph", spheres=Spheres(x=[0.0, 0.1], y=[0.0, 0.0], z=[0.01, 0.05], radius=[0.01, 0.01],
+                                             material="g"),
+        materials={"g": Material(density=2500.0, young=1e8, poisson=0.3), "w": Material(young=math.inf, poisson=0.25)},
+        laws={("g", "g"): HertzMindlinLaw(friction=0.4, restitution=0.7),
+              ("g", "w"): HertzMindlinLaw(friction=0.4, restitution=0.7)},
+        planes=[Plane("floor", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "w")], gravity=(0.0, 0.0, -9.81), n_steps=400,
+        outputs=Outputs3D(every=10))
+
+
+def _sph_last_good_is_loadable(err):
+    z = np.load(err.path)
+    for k in ("pos", "vel", "angvel", "hist", "plane_point"):
+        assert np.all(np.isfinite(z[k])), k
+    fresh = build(_spheres()).load_checkpoint(err.path)
+    ref = build(_spheres()).run(fresh.step)
+    assert np.array_equal(fresh.spheres.pos, ref.spheres.pos) and np.array_equal(fresh.spheres.vel, ref.spheres.vel)
+    return fresh.step
+
+
+def test_sph_nan_gravity_at_run_time_is_a_blowup_with_the_last_good_state(monkeypatch):
+    from demflow.simulation3d import Simulation3D
+
+    monkeypatch.setattr(Simulation3D, "CHUNK", 100)
+    sim = build(_spheres())
+    sim.run(150)
+    sim.g[0] = math.nan
+    err = _blows_up(sim, match="blew up")
+    assert _sph_last_good_is_loadable(err) == 150
+
+
+def test_sph_nan_mass_and_nan_law_output_are_blowups(monkeypatch):
+    from demflow.simulation3d import Simulation3D
+
+    sim = build(_spheres())
+    sim.spheres.mass[1] = math.nan  # a density NaN that got past the build (the sphere in free flight)
+    assert _sph_last_good_is_loadable(_blows_up(sim, match="blew up")) == 0
+    monkeypatch.setattr(Simulation3D, "CHUNK", 50)
+    sim = build(_spheres())
+    sim.run(60)
+    sim.law_params.Estar[:] = math.nan
+    assert _sph_last_good_is_loadable(_blows_up(sim, match="blew up")) == 60
