@@ -92,15 +92,15 @@ def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np
         for a in mats:
             a = int(a)
             sel = mat == a
-            partners = [(law, b) for (ma, b), law in disc_laws.items() if ma == a]
+            mates = [(law, b) for (ma, b), law in disc_laws.items() if ma == a]
             n_walls = len(wall_laws.get(a, ()))
-            if partners:  # at most the kissing number, and at most every other disc and wall
-                others = sum(int((mat == b).sum()) - (b == a) for _, b in partners)
+            if mates:  # at most the kissing number, and at most every other disc and wall
+                others = sum(int((mat == b).sum()) - (b == a) for _, b in mates)
                 count[sel] = np.minimum(kissing(r[sel], float(r.min())), others + n_walls)
             else:
                 count[sel] = n_walls
             best = np.zeros(int(sel.sum()))
-            for law, b in partners + [(law, None) for law in wall_laws.get(a, ())]:
+            for law, b in mates + [(law, None) for law in wall_laws.get(a, ())]:
                 if callable(law):
                     law = law(sel)
                 kn, kt = law[which], law[which + 1]
@@ -108,14 +108,10 @@ def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np
                 Aj = 0.0 if b is None else np.maximum(kn * inv_m_max[int(b)], kt * rot_max[int(b)])
                 best = np.maximum(best, np.sqrt(Ai) * (np.sqrt(Ai) + np.sqrt(Aj)))
             term[sel] = best
+        if partners is not None:  # the particles and walls each can meet at all
+            count = np.minimum(count, partners)
         return count * term, count
 
-    if partners is not None:
-        def rows_capped(which, _rows=rows):
-            term, count = _rows(which)
-            capped = np.minimum(count, partners)
-            return np.where(count > 0, term / np.maximum(count, 1) * capped, 0.0), capped
-        rows = rows_capped
     s_k, count = rows(0)
     s_c, _ = rows(2)
     i = int(np.argmax(s_k))
