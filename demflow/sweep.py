@@ -5,7 +5,9 @@ the items' order; :func:`case_sweep` runs a registered case once per parameter s
 check's value into one pandas table (``demflow sweep CASE --set seed=1,2,...``).  Where it runs:
 
 - ``scheduler=None`` or ``"local"``: a local cluster of ``workers`` processes (default: one per core),
-  one thread each, started for the sweep and closed after it;
+  one thread each, started for the sweep and closed after it; each worker's parallel kernels get the
+  cores divided among the workers (one each by default), so the processes do not oversubscribe the
+  machine (two workers each running a two-thread kernel on two cores is slower than either alone);
 - ``scheduler="serial"``: in this process, one item after another (what the tests compare with);
 - ``scheduler="tcp://host:port"``: an existing ``dask.distributed`` scheduler.
 
@@ -34,6 +36,20 @@ def _client(scheduler, workers):
     return Client(scheduler), None
 
 
+class _WithKernelThreads:
+    """``fn`` run with Numba's parallel kernels limited to ``threads`` threads (picklable: a worker
+    process applies the limit before each item; results do not depend on it, only speed)."""
+
+    def __init__(self, fn, threads: int):
+        self.fn, self.threads = fn, int(threads)
+
+    def __call__(self, item):
+        import numba
+
+        numba.set_num_threads(max(1, min(self.threads, numba.config.NUMBA_NUM_THREADS)))
+        return self.fn(item)
+
+
 def run_sweep(fn, items, *, scheduler=None, workers=None, progress: bool | None = None) -> list:
     """[fn(item) for item in items], computed on Dask (module docstring), in the items' order."""
     from . import progress as prog
@@ -44,6 +60,8 @@ def run_sweep(fn, items, *, scheduler=None, workers=None, progress: bool | None 
     from dask.distributed import as_completed
 
     client, cluster = _client(scheduler, workers)
+    if cluster is not None:
+        fn = _WithKernelThreads(fn, (os.cpu_count() or 1) // len(cluster.workers))
     try:
         futures = client.map(fn, items, pure=False)
         index = {f.key: k for k, f in enumerate(futures)}

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import demflow as df
@@ -99,6 +99,9 @@ axes3 = st.tuples(*[st.floats(0.3, 1.0) for _ in range(3)])
 
 @settings(max_examples=40, derandomize=True, deadline=None)
 @given(ai=axes3, aj=axes3, qi=quats, qj=quats, direction=quats, gap=st.floats(0.6, 1.05))
+# the example hypothesis 6.170.17 drew in CI (unequal curvatures, small overlap): always run
+@example(ai=(0.5, 0.3125, 0.5), aj=(0.5, 1.0, 0.3125), qi=(1.0, 0.0, 1.0, 1.0), qj=(0.5, 0.0, 1.0, 0.0),
+         direction=(0.0, 0.0, 1.0, 0.0), gap=0.90625)
 def test_contact_matches_brute_force(ai, aj, qi, qj, direction, gap):
     """P_i, P_j (hence δ, n and the contact point) of the kernel against sampling + BFGS on the
     definition (Miyata eq 44), for random shapes, orientations and centre distances (overlapping and
@@ -123,9 +126,10 @@ def test_contact_matches_brute_force(ai, aj, qi, qj, direction, gap):
     np.testing.assert_allclose([cx, cy, cz], 0.5 * (Pi + Pj), atol=t * scale)
     if abs(fi) > 1e-6:
         assert (o > 0) == (fi < 0)
-    if 0 < o < 0.05 * min(ai.min(), aj.min()):
-        # small overlap: P_i - P_j is along n to O(δ²/R) and δ is the distance between the points
-        assert abs(np.linalg.norm(Pi - Pj) - o) < 0.05 * o
+    # No claim that |P_i - P_j| = δ: with unequal curvatures P_i and P_j are offset sideways by O(δ),
+    # not O(δ²/R) (the CI example above: offset 0.484 δ at every δ from 0.0075 to 0.0125, so
+    # |P_i - P_j| = 1.111 δ however small the overlap).  Only for equal axes are they on one line
+    # (test_equal_axes_reproduce_spheres).
 
 
 def test_warm_start_gives_the_cold_answer_in_fewer_iterations():
