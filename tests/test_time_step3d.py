@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import critical_dt3d as cd
+import demflow as df
 from demflow import (HertzMindlinLaw, LinearLaw, Material, Outputs3D, Scene3D, SceneError, Spheres,
                      UnsafeTimeStepWarning, build)
 
@@ -70,3 +71,32 @@ def test_max_overlap_is_validated(bad):
 def test_max_contacts_is_validated():
     with pytest.raises(SceneError, match="scene.max_contacts"):
         build(_column(max_contacts=0))
+
+
+def _declared(max_overlap, **kw):
+    sc = cd.fcc(**kw)
+    sc.max_overlap = max_overlap
+    return sc
+
+
+def test_contacts_deeper_than_the_declared_overlap_warn_when_dt_is_above_the_estimate_there():
+    """The face-centred cubic packing pre-compressed to 1 % of the radius between the spheres and to
+    1 % × (3 (h/d)/√2)^(2/3) = 1.442 % at the planes, declared to reach only 0.4 %, stepped at the safe step
+    for 0.4 %: at 1.442 % the Hertzian springs are (1.442/0.4)^½ = 1.9× stiffer, the safe step
+    (0.4/1.442)^¼ = 0.73× as long, so the run warns, naming the depth and the field to declare; declared at
+    1.5 % and stepped at its own estimate, the same packing runs silently."""
+    plane = 0.01 * (3.0 * math.sqrt(2.0 / 3.0) / math.sqrt(2.0)) ** (2.0 / 3.0)
+    sc = _declared(0.004, n_steps=50)
+    sc.dt = df.build(_declared(0.004, dt=1e-12, allow_supercritical=True)).dt_safe
+    sim = df.build(sc)
+    with pytest.warns(df.UnsafeTimeStepWarning, match=r"deeper than scene.max_overlap=0.004.*max_overlap >= 0.0144"):
+        sim.run()
+    assert sim.deepest_overlap == pytest.approx(plane, rel=1e-3)
+    ok = _declared(0.015, n_steps=50)
+    ok.dt = df.build(_declared(0.015, dt=1e-12, allow_supercritical=True)).dt_safe
+    short = _declared(0.004, n_steps=50)  # deeper than declared, but dt below the safe step at that depth
+    short.dt = 0.7 * sc.dt
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", df.UnsafeTimeStepWarning)
+        df.build(ok).run()
+        df.build(short).run()
