@@ -413,8 +413,8 @@ def _refuse_initial_overlaps(sim: Simulation3D) -> None:
 
     hist = sim.pairs.hist.copy()
     pack_rows(sim.spheres)
-    status, _ = sphere_forces(sim.spheres, sim.pairs, sim.planes, sim.tris, sim.law_params, sim.dt, True,
-                              MAX_OVERLAP_RATIO)
+    status, _, _ = sphere_forces(sim.spheres, sim.pairs, sim.planes, sim.tris, sim.law_params, sim.dt, True,
+                                 MAX_OVERLAP_RATIO)
     sim.pairs.hist[:] = hist
     sim.spheres.FM[:] = 0.0
     sim.planes.force[:] = 0.0

@@ -36,7 +36,7 @@ class SimulationEllipsoids(Simulation3D):
     def __init__(self, *, ellipsoids, **kw):
         self.ell = ellipsoids
         super().__init__(**kw)
-        self.work = np.zeros(3)
+        self.work = np.zeros(4)
 
     def _advance(self, n_steps: int, rec: Records3, rec_count: int):
         from .stepping_ellipsoids import run_steps_ellipsoids
@@ -174,7 +174,8 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
 
 def contact_pass(sim: SimulationEllipsoids, recording: bool = False):
     """One ellipsoid pair pass at the current state (forces into ``sim.spheres.FM``, per-pair outputs
-    into ``sim.pairs``; the history advances as in a step): (status, elastic energy, iterations)."""
+    into ``sim.pairs``; the history advances as in a step): (status, elastic energy, iterations, energy
+    the contacts dissipated)."""
     from .contacts.ellipsoids import ellipsoid_forces
 
     rotations(sim.bodies.quat, sim.ell.rot)
@@ -185,7 +186,7 @@ def contact_pass(sim: SimulationEllipsoids, recording: bool = False):
 def _refuse_initial_overlaps(sim: SimulationEllipsoids) -> None:
     """An overlap beyond the blow-up limit at step 0 is bad input, not a blow-up: name the pair."""
     hist = sim.pairs.hist.copy()
-    status, _, _ = contact_pass(sim)
+    status, _, _, _ = contact_pass(sim)
     sim.pairs.hist[:] = hist
     sim.spheres.FM[:] = 0.0
     sim.planes.force[:] = 0.0

@@ -20,8 +20,8 @@ from typing import Sequence
 
 import numpy as np
 
-from .scene import (Box, ContactModel, GlobalDamping, Material, SceneError, check_flag, check_items, check_name,
-                    check_number, check_type, check_vector, check_whole)
+from .scene import (Box, ContactModel, GlobalDamping, Material, SceneError, check_choice, check_flag, check_items,
+                    check_name, check_number, check_type, check_vector, check_whole)
 
 
 @dataclass
@@ -196,6 +196,10 @@ class Scene3D:
         or a chain: 2); None: as many as can touch it (:func:`demflow.integrate.kissing_number_3d`)
     skin : neighbour-list margin [length]; None = 0.2 × mean radius
     box : periodic along x and/or y (:class:`demflow.scene.Box`); z is never periodic
+    energy_check : what a window of steps whose energy balance shows created energy does (issue 17 item
+        4: an unstable step, e.g. Hertz contacts far deeper than ``max_overlap``, or a dt accepted with
+        ``allow_supercritical``): "raise" BlowUpError with the last good state (default) or "warn"
+        (EnergyBalanceWarning, the run goes on); :meth:`demflow.simulation3d.Simulation3D._balance_close`
     """
 
     name: str
@@ -220,6 +224,7 @@ class Scene3D:
     outputs: Outputs3D = Outputs3D()
     box: Box = Box()
     description: str = ""
+    energy_check: str = "raise"
     clumps: Clumps | None = None
     ellipsoids: Ellipsoids | None = None
 
@@ -269,6 +274,7 @@ def check_scene3d(scene: Scene3D) -> None:
     check_flag("scene.adaptive_damping", scene.adaptive_damping)
     check_flag("scene.allow_supercritical", scene.allow_supercritical)
     check_flag("scene.allow_unsafe_dt", scene.allow_unsafe_dt)
+    check_choice("scene.energy_check", scene.energy_check, ("raise", "warn"))
     check_number("scene.max_overlap", scene.max_overlap, gt=0.0, le=0.5)
     if scene.max_contacts is not None:
         check_whole("scene.max_contacts", scene.max_contacts)

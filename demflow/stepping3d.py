@@ -99,7 +99,10 @@ def adapt_damping(sp, g, dmp):
 @njit
 def integrate(sp, g, dmp, dt, recording, orient):
     """Advance free spheres by one step (module docstring).  Returns (kinetic translation,
-    kinetic rotation, potential, largest step length / radius, damping work this step)."""
+    kinetic rotation, potential, largest step length / radius, damping work this step, work of the
+    fixed spheres on the others this step).  A fixed sphere moves with its prescribed velocity whatever
+    its contacts push, so it works on the free spheres: -(F·v + M·ω)Δt, F and M its contact sums
+    (the energy balance of :class:`demflow.simulation3d.Simulation3D`; every step)."""
     n = sp.pos.shape[0]
     alpha = dmp.alpha + (dmp.alpha_now[0] if dmp.adaptive else 0.0)
     c_abs = dmp.c_abs
@@ -110,6 +113,7 @@ def integrate(sp, g, dmp, dt, recording, orient):
     epot = 0.0
     jump2 = 0.0
     wdamp = 0.0
+    wfix = 0.0
     inv_dt = 1.0 / dt
     for i in range(n):
         m = sp.mass[i]
@@ -120,6 +124,7 @@ def integrate(sp, g, dmp, dt, recording, orient):
             epot -= m * (g[0] * sp.pos[i, 0] + g[1] * sp.pos[i, 1] + g[2] * sp.pos[i, 2])
         if sp.fixed[i]:
             for a in range(3):
+                wfix -= dt * (sp.FM[i, a] * sp.vel[i, a] + sp.FM[i, 3 + a] * sp.angvel[i, a])
                 sp.pos[i, a] += dt * sp.vel[i, a]
             if recording:
                 for a in range(3):
@@ -177,7 +182,7 @@ def integrate(sp, g, dmp, dt, recording, orient):
         rel2 = step2 * sp.inv_r2[i]
         if not rel2 <= jump2:  # also catches NaN
             jump2 = rel2 if rel2 == rel2 else np.inf
-    return ekt, ekr, epot, math.sqrt(jump2), wdamp
+    return ekt, ekr, epot, math.sqrt(jump2), wdamp, wfix
 
 
 @njit
@@ -348,8 +353,9 @@ def body_step(sp, bd, g, dmp, dt, recording):
 def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g, dmp, dt, rec, rec_count, work):
     """Run up to ``n_steps`` steps from step ``step0``; stop early for a rebuild or a blow-up.
 
-    ``work`` (2,) accumulates the work done on the spheres by the planes and by damping (energy
-    balance).  Returns (steps done, status, records written)."""
+    ``work`` (4,) accumulates the work done on the free spheres by the planes and the fixed spheres
+    (every step) [0] and by damping (recorded steps only) [1], and the energy the contacts dissipated [3]
+    (the energy balance; [2] is an ellipsoid scene's).  Returns (steps done, status, records written)."""
     n = sp.pos.shape[0]
     npl = planes.point.shape[0]
     limit2 = (0.5 * skin) ** 2
@@ -358,7 +364,8 @@ def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g
         set_plane_velocities(step, planes, ld)
         recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
         pack_rows(sp)
-        status, eel = sphere_forces(sp, pairs, planes, tris, law, dt, recording, MAX_OVERLAP_RATIO)
+        status, eel, diss = sphere_forces(sp, pairs, planes, tris, law, dt, recording, MAX_OVERLAP_RATIO)
+        work[3] += diss
         if status != OK:
             return s, BLOWUP, rec_count
         # work of the planes on the spheres in this step: -F_plane · v_plane Δt
@@ -392,7 +399,8 @@ def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g
                     fsum += pairs.fn[k]
                     nc += 1
             rec.unbalanced[rec_count] = (rsum / nfree) / (fsum / nc) if nfree > 0 and nc > 0 and fsum > 0 else np.inf
-        ekt, ekr, epot, jump, wdamp = integrate(sp, g, dmp, dt, recording, rec.orient)
+        ekt, ekr, epot, jump, wdamp, wfix = integrate(sp, g, dmp, dt, recording, rec.orient)
+        work[0] += wfix
         if bodies.pos.shape[0]:
             bkt, bkr, bpot, bjump2, bdamp = body_step(sp, bodies, g, dmp, dt, recording)
             ekt += bkt

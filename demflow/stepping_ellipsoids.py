@@ -29,8 +29,8 @@ def run_steps_ellipsoids(n_steps, step0, skin, sp, ell, bodies, pairs, planes, t
     or a blow-up.  :func:`demflow.stepping3d.run_steps3` with the ellipsoid pair pass and every
     particle moved by its body (:func:`demflow.stepping3d.body_step`).
 
-    ``work`` (3,) accumulates the work done by the planes and by damping (energy balance), and the
-    Newton iterations of the potential-point solves.  Returns (steps done, status, records written)."""
+    ``work`` (4,) accumulates the work done by the planes and by damping (energy balance), the
+    Newton iterations of the potential-point solves and the energy the contacts dissipated.  Returns (steps done, status, records written)."""
     n = sp.pos.shape[0]
     npl = planes.point.shape[0]
     limit2 = (0.5 * skin) ** 2
@@ -39,8 +39,10 @@ def run_steps_ellipsoids(n_steps, step0, skin, sp, ell, bodies, pairs, planes, t
         set_plane_velocities(step, planes, ld)
         recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
         rotations(bodies.quat, ell.rot)
-        status, eel, iters = ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, MAX_OVERLAP_RATIO)
+        status, eel, iters, diss = ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording,
+                                                    MAX_OVERLAP_RATIO)
         work[2] += iters
+        work[3] += diss
         if status != 0:
             return s, BLOWUP, rec_count
         # work of the planes on the spheres in this step: -F_plane · v_plane Δt

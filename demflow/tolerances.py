@@ -417,6 +417,19 @@ TOLERANCES = {
         "(hexagonal packing at 1.05× its critical Δt, first 1000 steps), ≈ 430 at 1.2×, and 0.9-6.9 "
         "(thesis-liquefaction at its Δt, 4.4× the safe estimate). 0.25 is 10× the largest stable value and 4× "
         "below the smallest unstable one.", kind="self-consistency"),
+    "energy.blow-up-3d": Tolerance(
+        1.0,
+        "Blow-up by energy in 3D (issue 17 item 4): a window (up to 20000 steps, carried over between runs) blows "
+        "up when the energy its steps created (Δ(kinetic + elastic) + dissipated by the contacts' dashpots and slip "
+        "- work of planes, fixed spheres and gravity; kinetic as ½m v_{n-1/2}·v_{n+1/2}; global/local damping not "
+        "counted, so a lower bound) exceeds this fraction of the energy it started with plus the work it was given. "
+        "Measured 2026-11-24 on every window of the 3D tests and of hertz-impacts, ch3-*, conformance-3d and "
+        "miyata-uniaxial-3d (57 scenes): stable ≤ 0.094 (ch3 elastic stack at its coarsest Δt, 0.4√(m/k), "
+        "contacts opening and closing), ≤ 0.07 (ch3 impulse chain), ≤ 0.042 (Hertz impacts, oblique engine "
+        "conformance), ≤ 2e-3 (ellipsoids, clumps, meshes); unstable (face-centred cubic packing, tests/"
+        "critical_dt3d.py): 49 at 1.02×, 194 at 1.05×, 1160 at 1.2× its measured critical Δt (5000 steps), and "
+        "0.36-0.6 in 250-step windows within 1 % of it. 1.0 is 10× the largest stable value and 49× below 1.02×.",
+        kind="self-consistency"),
     "stability.energy-growth": Tolerance(
         2.0,
         "Stability matrix observer (issue 17 item 2): no cell's scene supplies energy (no driven wall, no load), so a "

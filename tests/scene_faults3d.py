@@ -282,6 +282,12 @@ def _(pick):
     return sc, f"scene.box.{key}", v
 
 
+@fault3d("3d scene", "energy check")
+def _(pick):
+    v = pick(["stop", "Raise", "", None, 1, True, ["raise"]])
+    return _set(base3d(), energy_check=v), "scene.energy_check", v
+
+
 CATEGORIES3D = sorted({f.category for f in FAULTS3D})
 
 

@@ -89,7 +89,7 @@ def test_contacts_deeper_than_the_declared_overlap_warn_when_dt_is_above_the_est
     sc = _declared(0.004, n_steps=50)
     sc.dt = df.build(_declared(0.004, dt=1e-12, allow_supercritical=True)).dt_safe
     sim = df.build(sc)
-    with pytest.warns(df.UnsafeTimeStepWarning, match=r"deeper than scene.max_overlap=0.004.*max_overlap >= 0.0144"):
+    with pytest.warns(df.UnsafeTimeStepWarning, match=r"deeper than scene.max_overlap=0.004.*max_overlap >= 0.01442"):
         sim.run()
     assert sim.deepest_overlap == pytest.approx(plane, rel=1e-3)
     ok = _declared(0.015, n_steps=50)

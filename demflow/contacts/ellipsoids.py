@@ -93,7 +93,7 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
     """One pass over the pair list (module docstring): forces and moments into sp.FM (zeroed here)
     and planes.force, per-pair outputs into pairs.fn/ft/ovl/slide.  ``ell`` holds the semi-axes
     (n, 3), their smallest ``amin`` (n,) and the rotations ``rot`` (n, 9) of this step.
-    Returns (status, elastic energy, Newton iterations of the pass)."""
+    Returns (status, elastic energy, Newton iterations of the pass, energy the contacts dissipated)."""
     n = sp.pos.shape[0]
     pos = sp.pos
     vel = sp.vel
@@ -106,6 +106,7 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
     energy = 0.0
     status = 0
     iters = 0
+    diss = 0.0
     nw = planes.point.shape[0]
     mt = 0
     for k in range(pairs.i.shape[0]):
@@ -232,8 +233,9 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
                 hist[k, 1] = 0.0
                 hist[k, 2] = 0.0
         ma = sp.mat[i]
-        Fn, Tx, Ty, Tz, sliding = law_force3(law, hist, k, ma, mb, meff, re, overlap, vn, vtx, vty, vtz,
-                                             nx, ny, nz, dt)
+        Fn, Tx, Ty, Tz, sliding, dissipated = law_force3(law, hist, k, ma, mb, meff, re, overlap, vn, vtx, vty,
+                                                         vtz, nx, ny, nz, dt)
+        diss += dissipated
         fx = -Fn * nx + Tx
         fy = -Fn * ny + Ty
         fz = -Fn * nz + Tz
@@ -266,7 +268,7 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
         pairs.slide[k] = 1 if sliding else 0
         if recording:
             energy = law_energy3(law, energy, hist, k, ma, mb, re, overlap)
-    return status, energy, iters
+    return status, energy, iters, diss
 
 
 @njit

@@ -403,8 +403,8 @@ def _point_velocity(P, i, arm, nx, ny, nz):
 def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio):
     """One pass over the pair list: contact forces and moments into sp.FM (force 0-2, moment 3-5;
     zeroed here) and planes.force, per-pair outputs into pairs.fn/ft/ovl/slide.  Reads the packed
-    rows sp.P (:func:`pack_rows`).  Returns (status, elastic energy) — the energy only when
-    ``recording``.  A non-finite force is caught by the integrator's step-length test."""
+    rows sp.P (:func:`pack_rows`).  Returns (status, elastic energy, energy the contacts' dashpots and
+    slip dissipated in the step, summed in pair order) — the elastic energy only when ``recording``.  A non-finite force is caught by the integrator's step-length test."""
     n = sp.P.shape[0]
     P = sp.P
     FM = sp.FM
@@ -412,6 +412,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     planes.force[:] = 0.0
     hist = pairs.hist
     energy = 0.0
+    diss = 0.0
     status = 0
     nw = planes.point.shape[0]
     if tris.v.shape[0]:
@@ -532,8 +533,9 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 hist[k, 1] = 0.0
                 hist[k, 2] = 0.0
         ma = int(P[i, 11])
-        Fn, Tx, Ty, Tz, sliding = law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn,
-                                             vtx, vty, vtz, nx, ny, nz, dt)
+        Fn, Tx, Ty, Tz, sliding, dissipated = law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn,
+                                                         vtx, vty, vtz, nx, ny, nz, dt)
+        diss += dissipated
         fx = -Fn * nx + Tx
         fy = -Fn * ny + Ty
         fz = -Fn * nz + Tz
@@ -567,4 +569,4 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
         pairs.slide[k] = 1 if sliding else 0
         if recording:
             energy = law_energy3(law, energy, hist, k, ma, mb, rstar, overlap)
-    return status, energy
+    return status, energy, diss

@@ -120,13 +120,14 @@ class LawFamily:
 # projects them itself).
 
 def law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
-    """Advance 3D contact k by one step; returns (Fn, Tx, Ty, Tz, sliding).
+    """Advance 3D contact k by one step; returns (Fn, Tx, Ty, Tz, sliding, dissipated).
 
     ``vn`` = (v_i - v_j)·n > 0 while approaching, (vtx, vty, vtz) the tangential relative velocity
     of i's contact point against j's, n the unit normal from i to j, ``meff`` m_i m_j/(m_i + m_j)
     (the body mass against a plane), ``rstar`` R_i R_j/(R_i + R_j) (R_i against a plane).  Fn >= 0
-    is the total normal force (it pushes i along -n); T is the total tangential force on i.
-    Compiled per law (overload)."""
+    is the total normal force (it pushes i along -n); T is the total tangential force on i; ``dissipated``
+    the energy the contact's dashpots and Coulomb slip took in the step [force·length] (>= 0; the energy
+    balance of :class:`demflow.simulation3d.Simulation3D`).  Compiled per law (overload)."""
     raise NotImplementedError(f"no compiled 3D law for parameters of type {type(law).__name__}")
 
 

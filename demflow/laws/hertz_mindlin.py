@@ -210,9 +210,10 @@ def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz,
         Fn = Fe + 2.0 * zn * math.sqrt(meff * kn) * vn if zn > 0.0 else Fe
         if Fn < 0.0:
             Fn = 0.0
+        diss = (Fn - Fe) * vn * dt  # the normal dashpot (what the no-tension cut leaves of it)
         mode = law.tangential[ma, mb]
         if mode == TANGENTIAL_NONE:
-            return Fn, 0.0, 0.0, 0.0, False
+            return Fn, 0.0, 0.0, 0.0, False, diss
         kt = 8.0 * law.Gstar[ma, mb] * a
         if mode == TANGENTIAL_MINDLIN:
             if law.shear_spring == SHEAR_TOTAL:
@@ -235,7 +236,7 @@ def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz,
             vt = math.sqrt(vtx * vtx + vty * vty + vtz * vtz)
             if en == 0.0:
                 if vt == 0.0:
-                    return Fn, hist[k, 0], hist[k, 1], hist[k, 2], False
+                    return Fn, hist[k, 0], hist[k, 1], hist[k, 2], False, diss
                 ex, ey, ez, en = vtx, vty, vtz, vt
             ex /= en
             ey /= en
@@ -260,7 +261,10 @@ def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz,
         Tm2 = Tx * Tx + Ty * Ty + Tz * Tz
         sliding = Tm2 > Tcap * Tcap
         if sliding:
-            s = Tcap / math.sqrt(Tm2)
+            Tm = math.sqrt(Tm2)
+            s = Tcap / Tm
+            # Coulomb slip: the spring force beyond the cap, (|T_trial| - T_cap)/k_t of slip at T_cap
+            diss += Tcap * (Tm - Tcap) / kt
             Tx *= s
             Ty *= s
             Tz *= s
@@ -272,7 +276,7 @@ def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz,
                 hist[k, 0] = Tx
                 hist[k, 1] = Ty
                 hist[k, 2] = Tz
-            return Fn, Tx, Ty, Tz, True
+            return Fn, Tx, Ty, Tz, True, diss
         if not (law.shear_spring == SHEAR_TOTAL and mode == TANGENTIAL_MINDLIN):
             hist[k, 0] = Tx
             hist[k, 1] = Ty
@@ -283,7 +287,8 @@ def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz,
             Tx -= ct * vtx
             Ty -= ct * vty
             Tz -= ct * vtz
-        return Fn, Tx, Ty, Tz, False
+            diss += ct * (vtx * vtx + vty * vty + vtz * vtz) * dt
+        return Fn, Tx, Ty, Tz, False, diss
     return impl
 
 

@@ -175,8 +175,9 @@ def _linear_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz
         Fn = N + law.cn[ma, mb] * vn
         if Fn < 0.0:
             Fn = 0.0
+        diss = (Fn - N) * vn * dt  # the normal dashpot (what the no-tension cut leaves of it)
         if not law.has_shear:
-            return Fn, 0.0, 0.0, 0.0, False
+            return Fn, 0.0, 0.0, 0.0, False, diss
         ks = law.ks[ma, mb]
         Sx = hist[k, 0] - ks * vtx * dt
         Sy = hist[k, 1] - ks * vty * dt
@@ -186,15 +187,20 @@ def _linear_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz
         s2 = Sx * Sx + Sy * Sy + Sz * Sz
         sliding = s2 > smax * smax
         if sliding:
-            f = smax / math.sqrt(s2)
+            sm = math.sqrt(s2)
+            f = smax / sm
             Sx *= f
             Sy *= f
             Sz *= f
             cs = 0.0  # no shear dashpot while sliding
+            if ks > 0.0:  # Coulomb slip: (|S_trial| - S_max)/k_S at S_max
+                diss += smax * (sm - smax) / ks
+        else:
+            diss += cs * (vtx * vtx + vty * vty + vtz * vtz) * dt
         hist[k, 0] = Sx
         hist[k, 1] = Sy
         hist[k, 2] = Sz
-        return Fn, Sx - cs * vtx, Sy - cs * vty, Sz - cs * vtz, sliding
+        return Fn, Sx - cs * vtx, Sy - cs * vty, Sz - cs * vtz, sliding, diss
     return impl
 
 
