@@ -27,6 +27,9 @@ def test_fcc_hertz_packing_estimate_is_safe(kw):
     assert cd.is_unstable(3.0 * est, **kw) or cd.is_unstable(4.0 * est, **kw)  # the limit is within reach
     measured = cd.measured_critical_dt(est, 4.0 * est, rel=2e-2, **kw)  # asserts est itself is stable
     assert est <= measured, (est, measured)
+    if not kw:  # the stability matrix's 3D cells take the elastic packing's limit as FCC_CRITICAL × the estimate
+        from demflow.cases.stability_matrix import FCC_CRITICAL
+        assert measured / est == pytest.approx(FCC_CRITICAL, rel=2e-2), measured / est
 
 
 def test_larger_overlap_means_stiffer_hertz_contacts_and_a_smaller_step():

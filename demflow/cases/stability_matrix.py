@@ -3,8 +3,9 @@
 Each cell is a small scene pushed to one extreme — a time step near and above the true critical
 step of a frictional packing (its rotational mode), shear-to-normal stiffness ratios 1e-3 and 1e3,
 discs 100:1 in radius, no friction and a friction coefficient of 1e6, a BEM gap shrunk towards
-zero, pore-fluid viscosities 1e-3 to 1e3, and a 1e6-step run of a conservative packing — with the
-outcome it must have declared up front:
+zero, pore-fluid viscosities 1e-3 to 1e3, a 1e6-step run of a conservative packing, and in 3D a
+Hertz-Mindlin sphere packing near and above its measured critical step and at zero and huge
+friction — with the outcome it must have declared up front:
 
 - ``stable``: the run completes, and an observer that does not use demflow's own blow-up detectors
   finds the state finite, no overlap beyond half the smaller radius, and the energy not grown: the
@@ -26,7 +27,9 @@ the analytic 2/√24 √(m/kN) of its all-discs-spinning mode (measured to 1 % b
 tests/test_time_step.py); the 100:1 cell is one disc of radius 1 resting on three layers of discs
 of radius 0.01 in a box; the fluid cells are the §5.1 falling disc (CGS units, a 5 cm channel)
 with the viscosity or the BEM gap changed; "gaps → 0" is the Fluid.min_gap of a disc started
-touching a side wall, down to 1e-4 × its radius.
+touching a side wall, down to 1e-4 × its radius; the 3D cells are the face-centred cubic Hertz packing
+of :func:`fcc`, whose true critical step is FCC_CRITICAL × its safe estimate (measured by bisection in
+tests/test_time_step3d.py, which never reads the estimate).
 """
 from __future__ import annotations
 
@@ -40,7 +43,9 @@ from typing import Callable
 
 import numpy as np
 
+from ..laws.hertz_mindlin import HertzMindlinLaw
 from ..scene import Box, ContactModel, Discs, LinearLaw, Material, Outputs, Scene, SceneError, Wall
+from ..scene3d import Outputs3D, Plane, Scene3D, Spheres
 from ..tolerances import tol
 from .base import Case, CaseRun, Check
 
@@ -57,6 +62,13 @@ OUTCOMES = ("stable", "refused", "stopped")
 # the drift cell's velocity scale: displacements ~5e-4 R, far inside the 1e-2 R pre-compression (no contact opens: the
 # system is exactly linear), kinetic energy ~0.5 % of the stored elastic energy
 DRIFT_PERTURBATION = 0.1
+# the 3D packing (fcc): glass-like spheres of 1 cm, Hertz-Mindlin, every contact pre-compressed to 1 % of R
+FCC_R = 0.01
+FCC_E, FCC_NU, FCC_RHO = 7e10, 0.2, 2650.0
+FCC_PERTURBATION = 1e-6  # [length/time]: displacements far below the pre-compression
+# its true critical step over its safe estimate (elastic, μ = 0.5): 1.62, measured by bisection to 2 % and asserted
+# by tests/test_time_step3d.py; the cells above it use 1.1 × this
+FCC_CRITICAL = 1.62
 
 
 # ---------------------------------------------------------------------------------------------- scenes
@@ -90,6 +102,53 @@ def packing_scene(packing, dt, *, ks: float = KN, friction: float = 0.5, cn: flo
                  materials={"g": Material(density=DENSITY)}, laws={("g", "g"): law},
                  contact_model=ContactModel(normal="overlap"), box=Box(periodic_x=(0.0, lx), periodic_y=(0.0, ly)),
                  dt=dt, n_steps=n_steps, **kw)
+
+
+def fcc(nx: int = 6, ny: int = 6, layers: int = 3, overlap: float = 0.01, friction: float = 0.5,
+        restitution: float = 1.0, dt: float | None = None, seed: int = 3, **kw) -> Scene3D:
+    """Face-centred cubic sphere packing: hexagonal (111) layers stacked ABC between two planes, periodic
+    along x and y, every contact pre-compressed to the overlap ``overlap`` × R (the planes to the overlap
+    whose Hertz force equals the vertical pull of the three contacts a boundary layer lacks), so every
+    sphere is in equilibrium by symmetry; tiny random velocities and spins excite every mode."""
+    R = FCC_R
+    d = 2.0 * R - overlap * R  # centre distance of touching spheres
+    h = d * math.sqrt(2.0 / 3.0)  # layer spacing
+    lx, ly = nx * d, ny * d * math.sqrt(3.0) / 2.0
+    shifts = [(0.0, 0.0), (0.5 * d, d / (2.0 * math.sqrt(3.0))), (d, d / math.sqrt(3.0))]
+    pos = []
+    for k in range(layers):
+        sx, sy = shifts[k % 3]
+        for j in range(ny):
+            for i in range(nx):
+                x = (i + 0.5 * (j % 2)) * d + sx
+                y = j * d * math.sqrt(3.0) / 2.0 + sy
+                pos.append((x % lx, y % ly, k * h))
+    pos = np.array(pos)
+    # the plane overlap: 4/3 E* √R δp^1.5 = 3 (h/d) 4/3 E* √(R/2) δ^1.5  →  δp = δ (3 h/d /√2)^(2/3)
+    dp = overlap * R * (3.0 * (h / d) / math.sqrt(2.0)) ** (2.0 / 3.0)
+    rng = np.random.default_rng(seed)
+    n = len(pos)
+    law = HertzMindlinLaw(friction=friction, restitution=restitution)
+    kw.setdefault("max_overlap", overlap)
+    return Scene3D(
+        name=kw.pop("name", "fcc"),
+        spheres=Spheres(x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], radius=np.full(n, R), material="rock",
+                        velocity=FCC_PERTURBATION * rng.normal(size=(n, 3)),
+                        angular_velocity=FCC_PERTURBATION / R * rng.normal(size=(n, 3))),
+        materials={"rock": Material(density=FCC_RHO, young=FCC_E, poisson=FCC_NU)},
+        laws={("rock", "rock"): law},
+        planes=[Plane("floor", (0.0, 0.0, -(R - dp)), (0.0, 0.0, 1.0), "rock"),
+                Plane("lid", (0.0, 0.0, (layers - 1) * h + (R - dp)), (0.0, 0.0, -1.0), "rock")],
+        box=Box(periodic_x=(0.0, lx), periodic_y=(0.0, ly)), dt=dt, outputs=Outputs3D(every=0), **kw)
+
+
+def fcc_at(fraction: float, **kw) -> Scene3D:
+    """:func:`fcc` stepped at ``fraction`` × the safe critical step build computes for it."""
+    from ..build import build
+
+    probe = fcc(dt=1e-12, allow_supercritical=True, **{k: v for k, v in kw.items() if k not in (
+        "allow_unsafe_dt", "allow_supercritical", "n_steps", "name")})
+    return fcc(dt=fraction * build(probe).dt_safe, **kw)
 
 
 def unit_time() -> float:
@@ -142,9 +201,15 @@ def falling_disc_scene(*, mu=None, dt=None, allow=False, min_gap=None, at_wall=F
 
 
 # ---------------------------------------------------------------------------------------------- observer
+def _is3d(sim) -> bool:
+    return hasattr(sim, "spheres")
+
+
 def observed_energy(sim) -> float:
     """Kinetic + gravitational (net of buoyancy) + elastic energy [force·length], from the state alone
     (the springs' energy from the simulation's contact evaluation)."""
+    if _is3d(sim):
+        return kinetic_energy(sim) + _potential3d(sim) + float(sim._probe_energy()["elastic"])
     e = kinetic_energy(sim)
     gx, gy = sim.gx, sim.gy
     m_net = sim.mass.copy()
@@ -154,16 +219,53 @@ def observed_energy(sim) -> float:
     return e + float(sim.mechanical_energy()["elastic"])
 
 
+def _free3d(sim):
+    """The 3D particles that move on their own: not fixed, not a clump member (a clump: its body)."""
+    return sim.spheres.fixed == 0
+
+
+def _potential3d(sim) -> float:
+    sp, b = sim.spheres, sim.bodies
+    free = _free3d(sim)
+    e = -float(np.sum(sp.mass[free] * (sim.unwrapped_positions()[free] @ sim.g)))
+    return e - float(np.sum(b.mass * (b.pos @ sim.g)))  # (no gravity across periodic axes in these cells)
+
+
 def kinetic_energy(sim) -> float:
+    if _is3d(sim):
+        sp, b = sim.spheres, sim.bodies
+        free = _free3d(sim)
+        e = 0.5 * np.sum(sp.mass[free] * np.sum(sp.vel[free] ** 2, 1) + sp.inertia[free] * np.sum(sp.angvel[free] ** 2, 1))
+        return float(e + 0.5 * np.sum(b.mass * np.sum(b.vel ** 2, 1)) + 0.5 * np.sum(b.angvel * b.L))
     return float(0.5 * np.sum(sim.mass * (sim.vx ** 2 + sim.vy ** 2) + sim.inertia * sim.om ** 2))
 
 
 def lift_work(sim) -> float:
     """Σ |m_net| |g| R: the work of lifting every disc by its radius against gravity net of buoyancy."""
+    if _is3d(sim):
+        sp = sim.spheres
+        return float(np.sum(sp.mass * np.linalg.norm(sim.g) * sp.r))
     m_net = sim.mass.copy()
     if sim.fluid is not None:
         m_net = m_net - float(sim.scene.fluid.density) * math.pi * sim.r ** 2
     return float(np.sum(np.abs(m_net) * math.hypot(sim.gx, sim.gy) * sim.r))
+
+
+def _elastic(sim) -> float:
+    return float(sim._probe_energy()["elastic"]) if _is3d(sim) else float(sim.mechanical_energy()["elastic"])
+
+
+def _conserved(sim) -> float:
+    """Kinetic + elastic as the simulation's energy balance counts them (the drift cell's series)."""
+    m = sim._probe_energy() if _is3d(sim) else sim.mechanical_energy()
+    return float(m["kinetic"] + m["elastic"])
+
+
+def _state(sim) -> np.ndarray:
+    if _is3d(sim):
+        sp = sim.spheres
+        return np.concatenate([sp.pos.ravel(), sp.vel.ravel(), sp.angvel.ravel()])
+    return np.concatenate([sim.x, sim.y, sim.vx, sim.vy, sim.om])
 
 
 def energy_scale(sim) -> float:
@@ -171,11 +273,17 @@ def energy_scale(sim) -> float:
     elastic energy, and the work of lifting every disc by its radius against gravity net of buoyancy (so a
     disc starting at rest at the height origin still has a finite scale)."""
     kin = kinetic_energy(sim)
-    return max(abs(observed_energy(sim)), kin + float(sim.mechanical_energy()["elastic"]), lift_work(sim))
+    return max(abs(observed_energy(sim)), kin + _elastic(sim), lift_work(sim))
 
 
 def deepest_overlap(sim) -> float:
     """The largest overlap of a contact as a fraction of the smaller radius (a wall's: the disc's)."""
+    if _is3d(sim):
+        pr, r, n = sim.pairs, sim.spheres.r, sim.n
+        if pr.ovl.size == 0:
+            return 0.0
+        rb = np.where(pr.j < n, r[np.minimum(pr.j, n - 1)], np.inf)
+        return float(np.max(pr.ovl / np.minimum(r[pr.i], rb)))
     t = sim.contact_table_arrays()
     if t["overlap"].size == 0:
         return 0.0
@@ -231,8 +339,7 @@ def run_cell(cell: Cell, *, energy_check: str | None = None) -> Outcome:
         e0 = observed_energy(sim)
         ref = energy_scale(sim)
         k_ref = kinetic_energy(sim) + lift_work(sim)
-        m0 = sim.mechanical_energy()
-        conserved0 = m0["kinetic"] + m0["elastic"]
+        conserved0 = _conserved(sim)
         k_max = 0.0
         series = [conserved0]
         done = 0
@@ -243,8 +350,7 @@ def run_cell(cell: Cell, *, energy_check: str | None = None) -> Outcome:
                 done += n
                 e = observed_energy(sim)
                 k_max = max(k_max, kinetic_energy(sim))
-                mm = sim.mechanical_energy()
-                series.append(mm["kinetic"] + mm["elastic"])
+                series.append(_conserved(sim))
                 if not math.isfinite(e):
                     break
         except BlowUpError as err:
@@ -255,7 +361,7 @@ def run_cell(cell: Cell, *, energy_check: str | None = None) -> Outcome:
             return Outcome(cell, "stopped" if ok else "garbage",
                            str(err).split(". Last good")[0] + ("" if ok else " (last good state missing or not finite)"),
                            wall_s=time.perf_counter() - t0)
-    state = np.concatenate([sim.x, sim.y, sim.vx, sim.vy, sim.om])
+    state = _state(sim)
     e1 = observed_energy(sim)
     growth = (e1 - e0) / ref if ref > 0 else (0.0 if e1 == e0 else math.inf)  # relative to the scale
     deep = deepest_overlap(sim)
@@ -325,6 +431,19 @@ def cells(drift_steps: int = 1_000_000) -> list[Cell]:
         Cell("energy drift", f"{drift_steps:.0e} steps, frictionless hexagonal packing, no damping", "stable",
              hx(None, friction=0.0, name="drift", n_steps=drift_steps, perturbation=DRIFT_PERTURBATION), drift_steps,
              chunk=max(drift_steps // 100, 1)),
+        # 3D: the Hertz-Mindlin FCC packing (its spinning modes, as the 2D packing's)
+        Cell("3D time step", "0.9 × the safe estimate (Hertz FCC packing)", "stable",
+             lambda: fcc_at(0.9, name="fcc-0p9"), 5000),
+        Cell("3D time step", "1.1 × the true critical step", "refused",
+             lambda: fcc_at(1.1 * FCC_CRITICAL, name="fcc-1p1"), 5000, field="scene.dt="),
+        Cell("3D time step", "1.1 × the true critical step, allow_unsafe_dt", "stopped",
+             lambda: fcc_at(1.1 * FCC_CRITICAL, name="fcc-1p1-forced", allow_unsafe_dt=True), 5000),
+        Cell("3D time step", "3 × the true critical step, allow_supercritical", "stopped",
+             lambda: fcc_at(3.0 * FCC_CRITICAL, name="fcc-3-forced", allow_supercritical=True), 5000),
+        Cell("3D friction", "μ = 0, 0.9 × the safe estimate", "stable",
+             lambda: fcc_at(0.9, friction=0.0, name="fcc-mu-0"), 5000),
+        Cell("3D friction", "μ = 1e6, 0.9 × the safe estimate", "stable",
+             lambda: fcc_at(0.9, friction=1e6, name="fcc-mu-1e6"), 5000),
     ]
     return out
 
@@ -350,6 +469,13 @@ def garbage_control() -> Outcome:
     cell = Cell("control", "1.05 × critical, energy_check='warn'", "garbage",
                 lambda: packing_scene(hexagonal(), 1.05 * SPIN_LIMIT * u, name="control", allow_unsafe_dt=True),
                 20000)
+    return run_cell(cell, energy_check="warn")
+
+
+def garbage_control3d() -> Outcome:
+    """The 3D negative control: the 1.1 × critical FCC cell with the energy detector silenced must be garbage."""
+    cell = Cell("control", "3D, 1.1 × critical, energy_check='warn'", "garbage",
+                lambda: fcc_at(1.1 * FCC_CRITICAL, name="control-3d", allow_unsafe_dt=True), 5000)
     return run_cell(cell, energy_check="warn")
 
 
@@ -391,12 +517,17 @@ class StabilityMatrix(Case):
         "The fluid cells are the thesis §5.1 falling disc (CGS units) with its viscosity, Δt or BEM gap changed; "
         "'gaps → 0' is Fluid.min_gap for a disc started touching a side wall.",
         "The energy-drift cell runs the default 1e6 steps; the default test run uses 1e5 (the case's drift_steps).",
+        "The 3D cells are a face-centred cubic packing of 108 Hertz-Mindlin spheres (R = 1 cm, E = 70 GPa, ν = 0.2, "
+        "μ = 0.5, 1 % pre-compression) between two planes, periodic in x and y; its true critical step is 1.62 × its "
+        "safe estimate (measured by bisection to 2 % in tests/test_time_step3d.py), so '1.1 × critical' is at "
+        "least 1.08 × the true limit.",
     )
     params = dict(drift_steps=1_000_000)
 
     def run(self, p) -> CaseRun:
         outs = [run_cell(c) for c in cells(int(p["drift_steps"]))]
-        return CaseRun(extras={"outcomes": outs, "control": garbage_control(), "drift-control": drift_control()})
+        return CaseRun(extras={"outcomes": outs, "control": garbage_control(), "control-3d": garbage_control3d(),
+                               "drift-control": drift_control()})
 
     def checks(self, run, p):
         out = []
@@ -422,12 +553,13 @@ class StabilityMatrix(Case):
             f"negative control: the drift check fails for a run with dashpots at ζ = 1e-6 (drift {d:.3g} > {bound:.3g})",
             d > bound, d, SRC, "The drift bound must be able to fail: energy leaving through dashpots is seen.",
             kind="self-consistency"))
-        ctl = run.extras["control"]
-        out.append(Check.condition(
-            f"negative control: the observer calls the 1.05 × critical run with the energy detector silenced "
-            f"{ctl.outcome!r}", ctl.outcome == "garbage", 1.0 if ctl.outcome == "garbage" else 0.0, SRC,
-            "The observer must be able to fail: an unstable run the detectors do not stop is garbage.",
-            kind="self-consistency"))
+        for key, what in (("control", "the 1.05 × critical run"), ("control-3d", "the 3D 1.1 × critical run")):
+            ctl = run.extras[key]
+            out.append(Check.condition(
+                f"negative control: the observer calls {what} with the energy detector silenced {ctl.outcome!r}",
+                ctl.outcome == "garbage", 1.0 if ctl.outcome == "garbage" else 0.0, SRC,
+                "The observer must be able to fail: an unstable run the detectors do not stop is garbage.",
+                kind="self-consistency"))
         return out
 
     def tables(self, run, p):
@@ -435,10 +567,11 @@ class StabilityMatrix(Case):
 
         rows = [dict(row=o.cell.row, setting=o.cell.setting, expected=o.cell.expect, outcome=o.outcome,
                      detail=o.detail[:300], wall_s=round(o.wall_s, 2)) for o in run.extras["outcomes"]]
-        ctl = run.extras["control"]
-        rows.append(dict(row="control", setting=ctl.cell.setting, expected="garbage", outcome=ctl.outcome,
-                         detail=ctl.detail[:300], wall_s=round(ctl.wall_s, 2)))
+        for key in ("control", "control-3d"):
+            ctl = run.extras[key]
+            rows.append(dict(row="control", setting=ctl.cell.setting, expected="garbage", outcome=ctl.outcome,
+                             detail=ctl.detail[:300], wall_s=round(ctl.wall_s, 2)))
         return [("The matrix: each cell's expected and observed outcome", pd.DataFrame(rows))]
 
 
-__all__ = ["StabilityMatrix", "cells", "run_cell", "garbage_control", "hexagonal", "packing_scene"]
+__all__ = ["StabilityMatrix", "cells", "run_cell", "garbage_control", "garbage_control3d", "hexagonal", "packing_scene", "fcc", "fcc_at"]
