@@ -349,6 +349,115 @@ def body_step(sp, bd, g, dmp, dt, recording):
     return ekt, ekr, epot, jump2, wdamp
 
 
+@njit_inline
+def plane_work(planes, dt):
+    """The work the planes did on the spheres in this step, -Σ F_plane·v_plane Δt (F_plane: the spheres'
+    force on the plane)."""
+    w = 0.0
+    for p in range(planes.point.shape[0]):
+        w -= dt * (planes.force[p, 0] * planes.vel[p, 0] + planes.force[p, 1] * planes.vel[p, 1]
+                   + planes.force[p, 2] * planes.vel[p, 2])
+    return w
+
+
+@njit_inline
+def unbalanced_ratio(sp, bodies, pairs, g):
+    """YADE's unbalanced force: the mean |out-of-balance force| (contacts + gravity) of the free spheres and
+    the clumps (a clump: the resultant over its members) over the mean normal force of the touching pairs
+    (inf when there is none)."""
+    n = sp.pos.shape[0]
+    rsum = 0.0
+    nfree = 0
+    for i in range(n):
+        if not sp.fixed[i]:
+            nfree += 1
+            rsum += math.sqrt((sp.FM[i, 0] + sp.mass[i] * g[0]) ** 2 + (sp.FM[i, 1] + sp.mass[i] * g[1]) ** 2
+                              + (sp.FM[i, 2] + sp.mass[i] * g[2]) ** 2)
+    for b in range(bodies.pos.shape[0]):  # a clump: the resultant over its members
+        fx = bodies.mass[b] * g[0]
+        fy = bodies.mass[b] * g[1]
+        fz = bodies.mass[b] * g[2]
+        for p in range(bodies.start[b], bodies.start[b + 1]):
+            fx += sp.FM[p, 0]
+            fy += sp.FM[p, 1]
+            fz += sp.FM[p, 2]
+        nfree += 1
+        rsum += math.sqrt(fx * fx + fy * fy + fz * fz)
+    fsum = 0.0
+    nc = 0
+    for k in range(pairs.fn.shape[0]):
+        if pairs.fn[k] > 0.0:
+            fsum += pairs.fn[k]
+            nc += 1
+    return (rsum / nfree) / (fsum / nc) if nfree > 0 and nc > 0 and fsum > 0 else np.inf
+
+
+@njit_inline
+def record_step(rec, r, step, planes, pairs, sp, ekt, ekr, eel, epot, damping_work, dt):
+    """Store record row r of step ``step``: plane forces and positions, energies (module docstring),
+    touching pairs, the largest normal force and overlap, and the tracked spheres (position at step n,
+    velocity v_{n+1/2})."""
+    npl = planes.point.shape[0]
+    rec.step[r] = step
+    for p in range(npl):
+        for a in range(3):
+            rec.plane_force[r, p, a] = planes.force[p, a]
+            rec.plane_pos[r, p, a] = planes.point[p, a]
+    rec.energy[r, 0] = ekt
+    rec.energy[r, 1] = ekr
+    rec.energy[r, 2] = eel
+    rec.energy[r, 3] = epot
+    rec.energy[r, 4] = damping_work
+    c = 0
+    fmax = 0.0
+    omax = -np.inf
+    for k in range(pairs.fn.shape[0]):
+        if pairs.ovl[k] > 0.0:
+            c += 1
+        fmax = max(fmax, pairs.fn[k])
+        omax = max(omax, pairs.ovl[k])
+    rec.contacts[r] = c
+    rec.peak[r, 0] = fmax
+    rec.peak[r, 1] = omax
+    for t in range(rec.track_ids.shape[0]):
+        i = rec.track_ids[t]
+        for a in range(3):
+            # the position at step n and the on-step velocity estimate v_{n+1/2} (leapfrog)
+            rec.track[r, t, a] = sp.pos[i, a] - dt * sp.vel[i, a]
+            rec.track[r, t, 3 + a] = sp.vel[i, a]
+
+
+@njit_inline
+def move_walls3(planes, tris, dt):
+    """Planes, and the triangles of each wall body, move by Δt × their velocity."""
+    for p in range(planes.point.shape[0]):
+        for a in range(3):
+            planes.point[p, a] += dt * planes.vel[p, a]
+    for t in range(tris.v.shape[0]):  # triangles translate with their wall body
+        w = tris.wall[t]
+        for c in range(3):
+            for a in range(3):
+                tris.v[t, 3 * c + a] += dt * planes.vel[w, a]
+
+
+@njit_inline
+def _largest_move2(x, ref):
+    """max_i |x_i - ref_i|² over the rows of (m, 3) arrays."""
+    m2 = 0.0
+    for i in range(x.shape[0]):
+        d2 = (x[i, 0] - ref[i, 0]) ** 2 + (x[i, 1] - ref[i, 1]) ** 2 + (x[i, 2] - ref[i, 2]) ** 2
+        if d2 > m2:
+            m2 = d2
+    return m2
+
+
+@njit_inline
+def largest_displacements(sp, planes):
+    """The largest squared displacement of a sphere and of a plane since the last neighbour-list build (the
+    rebuild test)."""
+    return _largest_move2(sp.pos, sp.ref), _largest_move2(planes.point, planes.ref)
+
+
 @njit
 def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g, dmp, dt, rec, rec_count, work):
     """Run up to ``n_steps`` steps from step ``step0``; stop early for a rebuild or a blow-up.
@@ -356,8 +465,6 @@ def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g
     ``work`` (4,) accumulates the work done on the free spheres by the planes and the fixed spheres
     (every step) [0] and by damping (recorded steps only) [1], and the energy the contacts dissipated [3]
     (the energy balance; [2] is an ellipsoid scene's).  Returns (steps done, status, records written)."""
-    n = sp.pos.shape[0]
-    npl = planes.point.shape[0]
     limit2 = (0.5 * skin) ** 2
     for s in range(n_steps):
         step = step0 + s
@@ -368,37 +475,11 @@ def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g
         work[3] += diss
         if status != OK:
             return s, BLOWUP, rec_count
-        # work of the planes on the spheres in this step: -F_plane · v_plane Δt
-        for p in range(npl):
-            work[0] -= dt * (planes.force[p, 0] * planes.vel[p, 0] + planes.force[p, 1] * planes.vel[p, 1]
-                             + planes.force[p, 2] * planes.vel[p, 2])
+        work[0] += plane_work(planes, dt)
         if dmp.adaptive:
             adapt_damping(sp, g, dmp)
         if recording:
-            rsum = 0.0
-            nfree = 0
-            for i in range(n):
-                if not sp.fixed[i]:
-                    nfree += 1
-                    rsum += math.sqrt((sp.FM[i, 0] + sp.mass[i] * g[0]) ** 2 + (sp.FM[i, 1] + sp.mass[i] * g[1]) ** 2
-                                      + (sp.FM[i, 2] + sp.mass[i] * g[2]) ** 2)
-            for b in range(bodies.pos.shape[0]):  # a clump: the resultant over its members
-                fx = bodies.mass[b] * g[0]
-                fy = bodies.mass[b] * g[1]
-                fz = bodies.mass[b] * g[2]
-                for p in range(bodies.start[b], bodies.start[b + 1]):
-                    fx += sp.FM[p, 0]
-                    fy += sp.FM[p, 1]
-                    fz += sp.FM[p, 2]
-                nfree += 1
-                rsum += math.sqrt(fx * fx + fy * fy + fz * fz)
-            fsum = 0.0
-            nc = 0
-            for k in range(pairs.fn.shape[0]):
-                if pairs.fn[k] > 0.0:
-                    fsum += pairs.fn[k]
-                    nc += 1
-            rec.unbalanced[rec_count] = (rsum / nfree) / (fsum / nc) if nfree > 0 and nc > 0 and fsum > 0 else np.inf
+            rec.unbalanced[rec_count] = unbalanced_ratio(sp, bodies, pairs, g)
         ekt, ekr, epot, jump, wdamp, wfix = integrate(sp, g, dmp, dt, recording, rec.orient)
         work[0] += wfix
         if bodies.pos.shape[0]:
@@ -413,56 +494,10 @@ def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g
         if jump > MAX_STEP_RATIO or not math.isfinite(jump):
             return s + 1, BLOWUP, rec_count
         if recording:
-            r = rec_count
-            rec.step[r] = step
-            for p in range(npl):
-                for a in range(3):
-                    rec.plane_force[r, p, a] = planes.force[p, a]
-                    rec.plane_pos[r, p, a] = planes.point[p, a]
-            rec.energy[r, 0] = ekt
-            rec.energy[r, 1] = ekr
-            rec.energy[r, 2] = eel
-            rec.energy[r, 3] = epot
-            rec.energy[r, 4] = work[1]
-            c = 0
-            fmax = 0.0
-            omax = -np.inf
-            for k in range(pairs.fn.shape[0]):
-                if pairs.ovl[k] > 0.0:
-                    c += 1
-                fmax = max(fmax, pairs.fn[k])
-                omax = max(omax, pairs.ovl[k])
-            rec.contacts[r] = c
-            rec.peak[r, 0] = fmax
-            rec.peak[r, 1] = omax
-            for t in range(rec.track_ids.shape[0]):
-                i = rec.track_ids[t]
-                for a in range(3):
-                    # the position at step n and the on-step velocity estimate v_{n+1/2} (leapfrog)
-                    rec.track[r, t, a] = sp.pos[i, a] - dt * sp.vel[i, a]
-                    rec.track[r, t, 3 + a] = sp.vel[i, a]
+            record_step(rec, rec_count, step, planes, pairs, sp, ekt, ekr, eel, epot, work[1], dt)
             rec_count += 1
-        for p in range(npl):
-            for a in range(3):
-                planes.point[p, a] += dt * planes.vel[p, a]
-        for t in range(tris.v.shape[0]):  # triangles translate with their wall body
-            w = tris.wall[t]
-            for c in range(3):
-                for a in range(3):
-                    tris.v[t, 3 * c + a] += dt * planes.vel[w, a]
-        # rebuild test: largest sphere displacement plus largest plane displacement since the build
-        dmax2 = 0.0
-        for i in range(n):
-            d2 = ((sp.pos[i, 0] - sp.ref[i, 0]) ** 2 + (sp.pos[i, 1] - sp.ref[i, 1]) ** 2
-                  + (sp.pos[i, 2] - sp.ref[i, 2]) ** 2)
-            if d2 > dmax2:
-                dmax2 = d2
-        pmax2 = 0.0
-        for p in range(npl):
-            d2 = ((planes.point[p, 0] - planes.ref[p, 0]) ** 2 + (planes.point[p, 1] - planes.ref[p, 1]) ** 2
-                  + (planes.point[p, 2] - planes.ref[p, 2]) ** 2)
-            if d2 > pmax2:
-                pmax2 = d2
+        move_walls3(planes, tris, dt)
+        dmax2, pmax2 = largest_displacements(sp, planes)
         if (math.sqrt(dmax2) + math.sqrt(pmax2)) ** 2 > limit2:
             return s + 1, REBUILD, rec_count
     return n_steps, DONE, rec_count

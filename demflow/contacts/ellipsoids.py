@@ -30,6 +30,7 @@ import numpy as np
 from ..jit import njit
 from ..laws.base import law_energy3, law_force3
 from ..shapes.ellipsoid import FACE, ellipsoid_pair, ellipsoid_plane, ellipsoid_triangle
+from .spheres import relative_velocity, rotate_history
 
 BLOWUP_OVERLAP = 1
 WARM_COLUMNS = 3  # history columns after the law's: warm flag, λ_i, λ_j
@@ -205,33 +206,8 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
         vix = vel[i, 0] + (w[i, 1] * riz - w[i, 2] * riy)
         viy = vel[i, 1] + (w[i, 2] * rix - w[i, 0] * riz)
         viz = vel[i, 2] + (w[i, 0] * riy - w[i, 1] * rix)
-        rvx = vix - vjx
-        rvy = viy - vjy
-        rvz = viz - vjz
-        vn = rvx * nx + rvy * ny + rvz * nz
-        vtx = rvx - vn * nx
-        vty = rvy - vn * ny
-        vtz = rvz - vn * nz
-        # rotate the tangential history vector into the current tangent plane, keeping its length
-        hx = hist[k, 0]
-        hy = hist[k, 1]
-        hz = hist[k, 2]
-        hn = hx * nx + hy * ny + hz * nz
-        if hn != 0.0:
-            h2 = hx * hx + hy * hy + hz * hz
-            tx = hx - hn * nx
-            ty = hy - hn * ny
-            tz = hz - hn * nz
-            t2 = tx * tx + ty * ty + tz * tz
-            if t2 > 0.0:
-                s = math.sqrt(h2 / t2)
-                hist[k, 0] = tx * s
-                hist[k, 1] = ty * s
-                hist[k, 2] = tz * s
-            else:
-                hist[k, 0] = 0.0
-                hist[k, 1] = 0.0
-                hist[k, 2] = 0.0
+        vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
+        rotate_history(hist, k, nx, ny, nz)
         ma = sp.mat[i]
         Fn, Tx, Ty, Tz, sliding, dissipated = law_force3(law, hist, k, ma, mb, meff, re, overlap, vn, vtx, vty,
                                                          vtz, nx, ny, nz, dt)

@@ -399,6 +399,39 @@ def _point_velocity(P, i, arm, nx, ny, nz):
             P[i, 5] + arm * (P[i, 6] * ny - P[i, 7] * nx))
 
 
+@njit_inline
+def relative_velocity(rvx, rvy, rvz, nx, ny, nz):
+    """Normal and tangential parts of the contact points' relative velocity rv = v_i - v_j:
+    (vn = rv·n, > 0 approaching; v_t = rv - vn n)."""
+    vn = rvx * nx + rvy * ny + rvz * nz
+    return vn, rvx - vn * nx, rvy - vn * ny, rvz - vn * nz
+
+
+@njit_inline
+def rotate_history(hist, k, nx, ny, nz):
+    """Turn contact k's tangential history vector (columns 0-2) into the current tangent plane (normal n),
+    keeping its length (a vector along n is dropped)."""
+    hx = hist[k, 0]
+    hy = hist[k, 1]
+    hz = hist[k, 2]
+    hn = hx * nx + hy * ny + hz * nz
+    if hn != 0.0:
+        h2 = hx * hx + hy * hy + hz * hz
+        tx = hx - hn * nx
+        ty = hy - hn * ny
+        tz = hz - hn * nz
+        t2 = tx * tx + ty * ty + tz * tz
+        if t2 > 0.0:
+            s = math.sqrt(h2 / t2)
+            hist[k, 0] = tx * s
+            hist[k, 1] = ty * s
+            hist[k, 2] = tz * s
+        else:
+            hist[k, 0] = 0.0
+            hist[k, 1] = 0.0
+            hist[k, 2] = 0.0
+
+
 @njit
 def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio):
     """One pass over the pair list: contact forces and moments into sp.FM (force 0-2, moment 3-5;
@@ -505,33 +538,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             rmin = ri
         if overlap > max_overlap_ratio * rmin:
             status = BLOWUP_OVERLAP
-        rvx = vix - vjx
-        rvy = viy - vjy
-        rvz = viz - vjz
-        vn = rvx * nx + rvy * ny + rvz * nz
-        vtx = rvx - vn * nx
-        vty = rvy - vn * ny
-        vtz = rvz - vn * nz
-        # rotate the tangential history vector into the current tangent plane, keeping its length
-        hx = hist[k, 0]
-        hy = hist[k, 1]
-        hz = hist[k, 2]
-        hn = hx * nx + hy * ny + hz * nz
-        if hn != 0.0:
-            h2 = hx * hx + hy * hy + hz * hz
-            tx = hx - hn * nx
-            ty = hy - hn * ny
-            tz = hz - hn * nz
-            t2 = tx * tx + ty * ty + tz * tz
-            if t2 > 0.0:
-                s = math.sqrt(h2 / t2)
-                hist[k, 0] = tx * s
-                hist[k, 1] = ty * s
-                hist[k, 2] = tz * s
-            else:
-                hist[k, 0] = 0.0
-                hist[k, 1] = 0.0
-                hist[k, 2] = 0.0
+        vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
+        rotate_history(hist, k, nx, ny, nz)
         ma = int(P[i, 11])
         Fn, Tx, Ty, Tz, sliding, dissipated = law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn,
                                                          vtx, vty, vtz, nx, ny, nz, dt)
