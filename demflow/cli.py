@@ -174,6 +174,7 @@ def main(argv=None):
 
         matplotlib.use("Agg")
         out = Path(args.out or f"runs/{args.case}")
+        out.mkdir(parents=True, exist_ok=True)  # (a case without result tables still draws its figures here)
         run = case.run(p)
         for variant, res in run.results.items():
             res.meta["case"], res.meta["variant"], res.meta["params"] = args.case, variant, p

@@ -110,3 +110,13 @@ def test_help_runs_from_the_command_line(cmd):
     out = subprocess.run([sys.executable, "-m", "demflow.cli", *cmd, "--help"], capture_output=True, text=True,
                          timeout=120)
     assert out.returncode == 0 and "usage: demflow" in out.stdout, out.stderr
+
+
+def test_run_of_a_case_without_result_tables_creates_its_output_folder(tmp_path):
+    """`demflow run` draws the figures of a case whose run keeps no result tables (ch3-impulse-chain: records
+    only) into a folder that does not exist yet (it used to fail there, after the whole run)."""
+    from demflow.cli import main
+
+    out = tmp_path / "new" / "chain"
+    assert main(["--no-progress", "run", "ch3-impulse-chain", "--out", str(out)]) == 0
+    assert any(out.glob("*.png"))

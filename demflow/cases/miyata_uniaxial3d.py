@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from ..scene import Box, Material
-from ..scene3d import Clumps, Outputs3D, Plane, PlanePhase, Scene3D
+from ..scene3d import Clumps, Ellipsoids, Outputs3D, Plane, PlanePhase, Scene3D
 from ..shapes.clump import MIYATA_AXES, MIYATA_MASS, ClumpTemplate
 from ..laws.hertz_mindlin import HertzMindlinLaw
 from .base import Case, CaseRun, Check
@@ -33,9 +33,34 @@ G = 9.81
 SEED_FLOOR_STRESS = 1469 * 191.0 * G / 100.0  # the seed's self-weight floor stress [Pa]
 
 
-def _materials(young=7e10):
-    return {"rock": Material(density=2650.0, young=young, poisson=0.2),
+# the seed's own particle as a true ellipsoid (issue 16 item 2): the density that gives it 191 kg
+ELLIPSOID_DENSITY = MIYATA_MASS / (4.0 / 3.0 * math.pi * MIYATA_AXES[0] * MIYATA_AXES[1] * MIYATA_AXES[2])
+
+
+def _materials(young=7e10, shape="clumps"):
+    rho = ELLIPSOID_DENSITY if shape == "ellipsoids" else 2650.0  # (a clump template carries its own 191 kg)
+    return {"rock": Material(density=rho, young=young, poisson=0.2),
             "steel": Material(density=7800.0, young=young, poisson=0.2)}
+
+
+def _particles(p, pos, q) -> dict:
+    """The Scene3D fields of the particles: K-sphere clumps of the ellipsoid (``shape`` "clumps") or the
+    ellipsoid itself ("ellipsoids", :class:`demflow.scene3d.Ellipsoids`), at ``pos`` with orientations ``q``."""
+    if p.get("shape", "clumps") == "ellipsoids":
+        return dict(spheres=None, ellipsoids=Ellipsoids(axes=[MIYATA_AXES] * len(pos), x=pos[:, 0], y=pos[:, 1],
+                                                        z=pos[:, 2], material="rock", orientation=q))
+    T = ClumpTemplate.ellipsoid_like(int(p["K"]), MIYATA_AXES, MIYATA_MASS)
+    return dict(spheres=None, clumps=Clumps(T, x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], material="rock",
+                                            orientation=q))
+
+
+def particle_tops(sim) -> np.ndarray:
+    """The highest point of each particle [length]: a clump's members' tops, an ellipsoid's
+    z + √Σ_k (R_zk a_k)² (its support along z)."""
+    if hasattr(sim, "ell"):
+        rz = sim.ell.rot[:, 6:9] * sim.ell.axes
+        return sim.spheres.pos[:, 2] + np.sqrt(np.sum(rz * rz, axis=1))
+    return sim.spheres.pos[:, 2] + sim.spheres.r
 
 
 def _laws():
@@ -59,9 +84,8 @@ def insertion_scene(p) -> Scene3D:
     pos = np.array(pos)
     q = rng.normal(size=(len(pos), 4))
     q /= np.linalg.norm(q, axis=1)[:, None]
-    T = ClumpTemplate.ellipsoid_like(int(p["K"]), MIYATA_AXES, MIYATA_MASS)
-    return Scene3D(name="miyata-uniaxial-3d-settle", spheres=None, materials=_materials(p.get("young", 7e10)), laws=_laws(),
-                   clumps=Clumps(T, x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], material="rock", orientation=q),
+    return Scene3D(name="miyata-uniaxial-3d-settle", materials=_materials(p.get("young", 7e10), p.get("shape", "clumps")),
+                   laws=_laws(), **_particles(p, pos, q),
                    planes=[Plane("floor", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "steel")], gravity=(0.0, 0.0, -G),
                    local_damping=p["local_damping"], box=Box(periodic_x=(0.0, L), periodic_y=(0.0, L)),
                    dt_fraction=p["dt_fraction"], outputs=Outputs3D(every=1000), allow_unsafe_dt=True)
@@ -86,16 +110,13 @@ def next_stage(sim, p, name: str, keep=None, plate_z: float | None = None) -> Sc
     b = sim.bodies
     keep = np.arange(len(b.mass)) if keep is None else keep
     pos = b.pos[keep].copy()
-    pos[:, 0] += 0.0
     sc = insertion_scene(p)
-    T = sc.clumps.template
     planes = list(sc.planes)
     if plate_z is not None:
         planes.append(Plane("plate", (0.0, 0.0, plate_z), (0.0, 0.0, -1.0), "steel",
                             phases=(PlanePhase(cycles=10 ** 9, velocity=(0.0, 0.0, -p["plate_speed"])),)))
-    return Scene3D(name=name, spheres=None, materials=_materials(p.get("young", 7e10)), laws=_laws(),
-                   clumps=Clumps(T, x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], material="rock", orientation=b.quat[keep]),
-                   planes=planes, gravity=(0.0, 0.0, -G), local_damping=p["local_damping"],
+    return Scene3D(name=name, materials=_materials(p.get("young", 7e10), p.get("shape", "clumps")), laws=_laws(),
+                   **_particles(p, pos, b.quat[keep]), planes=planes, gravity=(0.0, 0.0, -G), local_damping=p["local_damping"],
                    box=Box(periodic_x=(0.0, p["box"]), periodic_y=(0.0, p["box"])), dt_fraction=p["dt_fraction"],
                    allow_unsafe_dt=True,
                    outputs=Outputs3D(every=p["record_every"]))
@@ -123,7 +144,9 @@ class MiyataUniaxial3D(Case):
         "Reduced variant: the seed's particle (191 kg, 37.1 × 26.0 × 18.2 cm), bed depth (trim at 2.0 m), plate "
         "speed (2 cm/s), material and stresses, in a 2 × 2 m periodic box (80 inserted) instead of 10 × 10 m (1500).",
         "Particles are K = 8 sphere clumps of the ellipsoid (greedy inscribed cover, 69 % of its volume), mass "
-        "191 kg; inserted on a loose lattice with seeded random orientations.",
+        "191 kg; inserted on a loose lattice with seeded random orientations. With shape='ellipsoids' (issue 16 "
+        "item 2) they are the seed's ellipsoid itself (Lin & Ng contact, density 2598 kg/m³ for 191 kg), same "
+        "protocol and seeds.",
         "Cundall local damping 0.3 and dashpots from e = 0.3 throughout (the seed does not state its damping).",
         "Contacts and forces on the plate and floor are per particle (members summed).",
     )
@@ -131,12 +154,16 @@ class MiyataUniaxial3D(Case):
     # stress rises and collapses as they slip (measured: 336 kPa at 119 mm, 0 at 131 mm, 481 kPa at 180 mm);
     # left out of a plain `demflow validate` until the variant's size and protocol are settled
     slow = True
-    params = dict(box=2.0, n_insert=80, K=8, seed=1, trim=2.0, plate_speed=0.02, stress_max=600e3, dt_fraction=0.2,
+    params = dict(shape="clumps", box=2.0, n_insert=80, K=8, seed=1, trim=2.0, plate_speed=0.02, stress_max=600e3, dt_fraction=0.2,
                   local_damping=0.3, young=7e10, record_every=200, settle_max=400000, snapshots=10)
 
     def run(self, p) -> CaseRun:
         from ..build import build
+        from ..scene import SceneError
 
+        if p["shape"] not in ("clumps", "ellipsoids"):
+            raise SceneError(f"miyata-uniaxial-3d: shape={p['shape']!r} is not a particle shape of this case; give "
+                             "'clumps' (K-sphere clumps of the ellipsoid) or 'ellipsoids' (the ellipsoid itself)")
         A = p["box"] ** 2
         s1 = build(insertion_scene(p))
         steps1 = settle(s1, p, p["settle_max"])
@@ -146,7 +173,7 @@ class MiyataUniaxial3D(Case):
         weight = float(s2.bodies.mass.sum()) * G
         floor_settled = -float(s2.planes.force[0, 2])
         n_particles = len(s2.bodies.mass)
-        top = float((s2.spheres.pos[:, 2] + s2.spheres.r).max())
+        top = float(particle_tops(s2).max())
         s3 = build(next_stage(s2, p, "miyata-uniaxial-3d-loading", plate_z=top + 0.005))
         z0 = top + 0.005
         rows = []
@@ -272,3 +299,11 @@ class MiyataUniaxial3D(Case):
             paths.append(f"{outdir}/plate_pdf.png")
             save_figure(fig, paths[1])
         return paths
+
+
+class MiyataUniaxial3DEllipsoids(MiyataUniaxial3D):
+    """The same protocol with the seed's own particle, the ellipsoid (issue 16 item 2): its own report page."""
+
+    name = "miyata-uniaxial-3d-ellipsoids"
+    title = "Uniaxial compression of ellipsoids (Miyata §3.3, the seed's particle), reduced variant"
+    params = dict(MiyataUniaxial3D.params, shape="ellipsoids")
