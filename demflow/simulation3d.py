@@ -308,6 +308,15 @@ class Simulation3D:
                     pos=pos[free], mass=sp.mass[free].copy(), bpos=bpos, bmass=b.mass.copy(),
                     work=float(work[0]), dissipated=float(work[3]))
 
+    def mechanical_energy(self) -> dict:
+        """The energy of the current state as the energy balance counts it (:meth:`_probe_energy`, nothing
+        changes): ``kinetic`` (½ m v_{n-1/2}·v_{n+1/2}, rotations included), ``elastic`` (the contacts'
+        springs at x_n) [force·length]; NaN when the probe step cannot be taken."""
+        e = self._probe_energy()
+        if e is None:
+            return dict(kinetic=math.nan, elastic=math.nan)
+        return dict(kinetic=e["kinetic"], elastic=e["elastic"])
+
     def _balance_open(self) -> dict | None:
         """Open a window of the energy balance at the current step."""
         return dict(step=self.step, start=self._probe_energy())

@@ -209,7 +209,7 @@ def observed_energy(sim) -> float:
     """Kinetic + gravitational (net of buoyancy) + elastic energy [force·length], from the state alone
     (the springs' energy from the simulation's contact evaluation)."""
     if _is3d(sim):
-        return kinetic_energy(sim) + _potential3d(sim) + float(sim._probe_energy()["elastic"])
+        return kinetic_energy(sim) + _potential3d(sim) + _elastic(sim)
     e = kinetic_energy(sim)
     gx, gy = sim.gx, sim.gy
     m_net = sim.mass.copy()
@@ -252,12 +252,12 @@ def lift_work(sim) -> float:
 
 
 def _elastic(sim) -> float:
-    return float(sim._probe_energy()["elastic"]) if _is3d(sim) else float(sim.mechanical_energy()["elastic"])
+    return float(sim.mechanical_energy()["elastic"])
 
 
 def _conserved(sim) -> float:
     """Kinetic + elastic as the simulation's energy balance counts them (the drift cell's series)."""
-    m = sim._probe_energy() if _is3d(sim) else sim.mechanical_energy()
+    m = sim.mechanical_energy()
     return float(m["kinetic"] + m["elastic"])
 
 
