@@ -10,7 +10,7 @@ import numpy as np
 
 from .laws.hertz_mindlin import HertzMindlin
 from .laws.linear import Linear
-from .scene import SceneError, check_name, is_number, type_phrase
+from .scene import SceneError, is_number, type_phrase
 from .scene3d import Scene3D, Spheres, check_scene3d
 from .simulation3d import Simulation3D
 from .state3d import Bodies3, Box3, Damping3, Loading3, Planes3, Spheres3, Triangles3
@@ -197,6 +197,26 @@ def _walls(scene, walls, index):
     return planes, tris, loading
 
 
+def particle_materials(scene, field: str, one: str, material, n: int) -> list[str]:
+    """The material name of each of the n particles of ``scene.<field>`` (``one``: what one of them is
+    called in a message), from one name for all or one per particle; each must be declared in
+    scene.materials.  Errors name the field, the entry, the rule and the fix."""
+    if isinstance(material, str):
+        mats = [material] * n
+    elif isinstance(material, (list, tuple, np.ndarray)):
+        mats = list(material)
+    else:
+        raise SceneError(f"scene.{field}.material={material!r} is {type_phrase(material)}; give a material "
+                         f"name or one per {one}")
+    if len(mats) != n:
+        raise SceneError(f"scene.{field}.material has {len(mats)} entries for {n} {field}; give one per {one} "
+                         "or one name for all")
+    for k, m in enumerate(mats):
+        if not isinstance(m, str) or m not in scene.materials:
+            raise SceneError(f"scene.{field}.material[{k}]={m!r} is not declared; add it to scene.materials")
+    return mats
+
+
 def _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies) -> float:
     """The packing's safe critical time step (:func:`demflow.integrate.safe_time_step_3d`) [time], for the
     sphere pairs that can meet and every sphere against every wall.  A clump member moves with its clump:
@@ -305,19 +325,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
     if np.any(r <= 0):
         k = int(np.argmax(r <= 0))
         raise SceneError(f"scene.spheres.radius[{k}]={r[k]!r} must be > 0; give positive radii")
-    if isinstance(s.material, str):
-        mats = [s.material] * n
-    elif isinstance(s.material, (list, tuple, np.ndarray)):
-        mats = list(s.material)
-    else:
-        raise SceneError(f"scene.spheres.material={s.material!r} is {type_phrase(s.material)}; give a material "
-                         "name or one per sphere")
-    if len(mats) != n:
-        raise SceneError(f"scene.spheres.material has {len(mats)} entries for {n} spheres; give one per sphere "
-                         "or one name for all")
-    for k, m in enumerate(mats):
-        if not isinstance(m, str) or m not in scene.materials:
-            raise SceneError(f"scene.spheres.material[{k}]={m!r} is not declared; add it to scene.materials")
+    mats = particle_materials(scene, "spheres", "sphere", s.material, n)
     names = list(scene.materials)
     index = {m: k for k, m in enumerate(names)}
     mat = np.array([index[m] for m in mats], np.int64)

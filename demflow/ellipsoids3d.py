@@ -17,10 +17,11 @@ import math
 
 import numpy as np
 
-from .build3d import _array, _common_length, _law_family, _skin_and_box, _walls, quat_to_matrix, rayleigh_time_step
+from .build3d import (_array, _common_length, _law_family, _skin_and_box, _walls, particle_materials, quat_to_matrix,
+                      rayleigh_time_step)
 from .contacts.ellipsoids import WARM_COLUMNS
 from .laws.hertz_mindlin import HertzMindlin
-from .scene import SceneError, type_phrase
+from .scene import SceneError
 from .shapes.ellipsoid import rotations
 from .simulation3d import Simulation3D
 from .state3d import Bodies3, Damping3, Ellipsoids3, Records3, Spheres3
@@ -58,20 +59,7 @@ class SimulationEllipsoids(Simulation3D):
 
 
 def _materials(scene, e, n):
-    if isinstance(e.material, str):
-        mats = [e.material] * n
-    elif isinstance(e.material, (list, tuple, np.ndarray)):
-        mats = list(e.material)
-    else:
-        raise SceneError(f"scene.ellipsoids.material={e.material!r} is {type_phrase(e.material)}; give a material "
-                         "name or one per ellipsoid")
-    if len(mats) != n:
-        raise SceneError(f"scene.ellipsoids.material has {len(mats)} entries for {n} ellipsoids; give one per "
-                         "ellipsoid or one name for all")
-    for k, m in enumerate(mats):
-        if not isinstance(m, str) or m not in scene.materials:
-            raise SceneError(f"scene.ellipsoids.material[{k}]={m!r} is not declared; add it to scene.materials")
-    return mats
+    return particle_materials(scene, "ellipsoids", "ellipsoid", e.material, n)
 
 
 def build_ellipsoids(scene) -> SimulationEllipsoids:
