@@ -24,6 +24,7 @@ from .scene import EnergyBalanceWarning, SceneError, UnsafeTimeStepWarning
 from .simulation import ENERGY_ROUND_OFF, BlowUpError
 from .state3d import Pairs3, Records3
 from .stepping3d import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps3
+from .tolerances import tol
 
 _STATE = ("pos", "vel", "angvel", "quat", "img")
 _BODY_STATE = ("pos", "vel", "L", "angvel", "quat")
@@ -210,6 +211,16 @@ class Simulation3D:
         self._balance_key = self._fingerprint()
         return self
 
+    def deepest_overlap_now(self) -> float:
+        """The largest overlap of a listed pair at the last force evaluation, as a fraction of the smaller
+        radius (a wall's: the sphere's; a gap is negative); 0 when nothing is listed."""
+        pr = self.pairs
+        if pr.ovl.size == 0:
+            return 0.0
+        n, r = self.n, self.spheres.r
+        rmin = np.where(pr.j < n, np.minimum(r[pr.i], r[np.minimum(pr.j, n - 1)]), r[pr.i])
+        return float(np.max(pr.ovl / rmin))
+
     def _check_overlap_coverage(self) -> None:
         """Warn (once) when Hertz contacts have gone deeper than the scene's ``max_overlap`` so far that the
         time step is above the safe estimate at that depth.  The estimate was taken at ``max_overlap``
@@ -220,13 +231,9 @@ class Simulation3D:
         6.6e12-fold with overlaps below 1.5 % of the radius, and no test fired.)"""
         from .laws.hertz_mindlin import HertzMindlin
 
-        pr = self.pairs
-        if not isinstance(self.law, HertzMindlin) or pr.ovl.size == 0:
+        if not isinstance(self.law, HertzMindlin) or self.pairs.ovl.size == 0:
             return
-        n = self.n
-        r = self.spheres.r
-        rmin = np.where(pr.j < n, np.minimum(r[pr.i], r[np.minimum(pr.j, n - 1)]), r[pr.i])
-        deepest = float(np.max(pr.ovl / rmin))
+        deepest = self.deepest_overlap_now()
         self.deepest_overlap = max(self.deepest_overlap, deepest)
         declared = float(self.scene.max_overlap)
         if self._overlap_warned or self.scene.allow_supercritical or deepest <= declared or self.dt > self.dt_safe:
@@ -352,8 +359,6 @@ class Simulation3D:
                                    dissipated_contacts=contacts, work_walls=walls, work_gravity=gravity,
                                    created=created, supplied=supplied,
                                    ratio=created / supplied if supplied > 0 else math.inf)
-        from .tolerances import tol
-
         limit = tol("energy.blow-up-3d").value
         if math.isfinite(created) and (created <= limit * supplied
                                        or created <= ENERGY_ROUND_OFF * (abs(e1) + abs(contacts))):

