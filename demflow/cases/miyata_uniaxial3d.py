@@ -132,6 +132,126 @@ def per_particle_forces(sim, wall: int) -> np.ndarray:
     return f[f > 0]
 
 
+STRESS_LEVELS_KPA = (100, 200, 300, 400, 500, 600)  # the curve sampled at fixed stresses (every run reaches them)
+
+
+def run_statistics(u) -> dict:
+    """The statistics one run (:class:`demflow.engines.uniaxial3d.UniaxialRun`, any engine) is judged on:
+    particles left after trimming, the bed's top before loading, the settlement [mm] where the plate stress
+    first reaches each of :data:`STRESS_LEVELS_KPA` (the stress-settlement curve at fixed stresses),
+    the particles on the plate and the floor (mean over the 400-600 kPa snapshots) and the q-model N of
+    the per-particle forces f = F/<F> on each (pooled over the snapshots)."""
+    from ..analysis.forces import fit_q_model
+    from ..engines.uniaxial3d import PLATE_GAP
+
+    c = u.curve
+    out = {"particles after trimming": float(u.meta["n_particles"]),
+           "bed top before loading [m]": float(u.meta["plate_start"]) - PLATE_GAP}
+    for L in STRESS_LEVELS_KPA:
+        hit = c[c.plate_stress >= L * 1e3]
+        out[f"settlement at {L} kPa [mm]"] = float(hit.settlement.iloc[0]) * 1e3 if len(hit) else math.nan
+    for wall in ("plate", "floor"):
+        fs = [f for f in u.snapshot_forces(wall) if f.size]
+        out[f"particles on the {wall} (mean of snapshots)"] = float(np.mean([f.size for f in fs])) if fs else math.nan
+        out[f"q-model N, {wall}"] = float(fit_q_model(np.concatenate([f / f.mean() for f in fs])).N) if fs else math.nan
+    return out
+
+
+def pooled_f(u, wall: str = "plate") -> np.ndarray:
+    """f = F/<F> per particle on ``wall``, each snapshot normalised by its own mean, pooled."""
+    fs = [f for f in u.snapshot_forces(wall) if f.size]
+    return np.concatenate([f / f.mean() for f in fs]) if fs else np.zeros(0)
+
+
+def band_of(values) -> tuple[float, float]:
+    """95 % prediction band of one more seed (:func:`demflow.cases.cs_photoelastic.prediction_band`),
+    over the finite values."""
+    from .cs_photoelastic import prediction_band
+
+    v = np.asarray([x for x in values if math.isfinite(x)], float)
+    return prediction_band(v) if v.size >= 3 else (math.nan, math.nan)
+
+
+def ks_band(band: dict, wall: str = "plate") -> tuple[np.ndarray, float]:
+    """The KS distance of each demflow seed's pooled f on ``wall`` from the other seeds' pooled f, and the
+    upper end of their 95 % prediction band: how far one more seed's distribution falls from the rest."""
+    from scipy import stats
+
+    seeds = list(band)
+    d = []
+    for s in seeds:
+        rest = np.concatenate([pooled_f(band[q], wall) for q in seeds if q != s])
+        d.append(stats.ks_2samp(pooled_f(band[s], wall), rest).statistic)
+    return np.asarray(d), band_of(d)[1]
+
+
+
+ENGINE_PARAMS = ("box", "n_insert", "K", "trim", "plate_speed", "stress_max", "dt_fraction", "local_damping", "young",
+                 "plate_z_min",
+                 "record_every", "settle_max", "snapshots")
+
+
+def engine_for(name: str, p: dict):
+    """The engine object that runs this protocol: YADE (clumps) or LIGGGHTS (multisphere)."""
+    from ..engines import EngineError
+
+    if name == "yade":
+        from ..engines.yade_uniaxial3d import YadeUniaxial3DEngine
+
+        return YadeUniaxial3DEngine(p)
+    if name == "liggghts":
+        from ..engines.liggghts_uniaxial3d import LiggghtsUniaxial3DEngine
+
+        return LiggghtsUniaxial3DEngine(p)
+    raise EngineError(f"no uniaxial deck for engine {name!r}; choose yade or liggghts")
+
+
+def protocol_run(p) -> dict:
+    """demflow's run of the protocol for parameters ``p`` (one seed): the loading curve, the snapshots and
+    the settled bed's numbers (the keys :meth:`demflow.engines.uniaxial3d.UniaxialRun.from_case` reads)."""
+    from ..build import build
+
+    A = p["box"] ** 2
+    s1 = build(insertion_scene(p))
+    steps1 = settle(s1, p, p["settle_max"])
+    keep = np.nonzero(s1.bodies.pos[:, 2] <= p["trim"])[0]
+    s2 = build(next_stage(s1, p, "miyata-uniaxial-3d-trimmed", keep))
+    steps2 = settle(s2, p, p["settle_max"])
+    weight = float(s2.bodies.mass.sum()) * G
+    floor_settled = -float(s2.planes.force[0, 2])
+    n_particles = len(s2.bodies.mass)
+    top = float(particle_tops(s2).max())
+    s3 = build(next_stage(s2, p, "miyata-uniaxial-3d-loading", plate_z=top + 0.005))
+    z0 = top + 0.005
+    rows = []
+    snaps = []
+    levels = list(np.linspace(400e3, p["stress_max"], p["snapshots"]))
+    touched = None
+    while True:
+        s3.run(p["record_every"])
+        plate = float(s3.planes.force[1, 2]) / A
+        floor = -float(s3.planes.force[0, 2]) / A
+        zp = float(s3.planes.point[1, 2])
+        if touched is None and plate > 0:
+            touched = zp
+        fp = per_particle_forces(s3, 1)
+        ff = per_particle_forces(s3, 0)
+        rows.append({"step": s3.step, "plate_z": zp, "settlement": (touched - zp) if touched is not None else 0.0,
+                     "plate_stress": plate, "floor_stress": floor, "plate_contacts": fp.size,
+                     "floor_contacts": ff.size})
+        while levels and plate >= levels[0]:
+            snaps.append({"stress": plate, "plate": fp, "floor": ff})
+            levels.pop(0)
+        if plate >= p["stress_max"] or zp < p["plate_z_min"]:
+            break
+    import pandas as pd
+
+    return {"curve": pd.DataFrame(rows), "snapshots": snaps, "weight": weight, "floor_settled": floor_settled,
+            "n_particles": n_particles, "area": A, "settle_steps": (steps1, steps2), "dt": s3.dt, "plate_start": z0,
+            "seed": int(p["seed"])}
+
+
+
 class MiyataUniaxial3D(Case):
     name = "miyata-uniaxial-3d"
     title = "Uniaxial compression of ellipsoid-like clumps (Miyata §3.3), reduced variant"
@@ -155,53 +275,75 @@ class MiyataUniaxial3D(Case):
     # left out of a plain `demflow validate` until the variant's size and protocol are settled
     slow = True
     params = dict(shape="clumps", box=2.0, n_insert=80, K=8, seed=1, trim=2.0, plate_speed=0.02, stress_max=600e3, dt_fraction=0.2,
-                  local_damping=0.3, young=7e10, record_every=200, settle_max=400000, snapshots=10)
+                  local_damping=0.3, young=7e10, record_every=200, settle_max=400000, snapshots=10, plate_z_min=0.5, band_seeds=8,
+                  engine_refs=1, workers=None)
 
     def run(self, p) -> CaseRun:
-        from ..build import build
         from ..scene import SceneError
 
         if p["shape"] not in ("clumps", "ellipsoids"):
             raise SceneError(f"miyata-uniaxial-3d: shape={p['shape']!r} is not a particle shape of this case; give "
                              "'clumps' (K-sphere clumps of the ellipsoid) or 'ellipsoids' (the ellipsoid itself)")
-        A = p["box"] ** 2
-        s1 = build(insertion_scene(p))
-        steps1 = settle(s1, p, p["settle_max"])
-        keep = np.nonzero(s1.bodies.pos[:, 2] <= p["trim"])[0]
-        s2 = build(next_stage(s1, p, "miyata-uniaxial-3d-trimmed", keep))
-        steps2 = settle(s2, p, p["settle_max"])
-        weight = float(s2.bodies.mass.sum()) * G
-        floor_settled = -float(s2.planes.force[0, 2])
-        n_particles = len(s2.bodies.mass)
-        top = float(particle_tops(s2).max())
-        s3 = build(next_stage(s2, p, "miyata-uniaxial-3d-loading", plate_z=top + 0.005))
-        z0 = top + 0.005
-        rows = []
-        snaps = []
-        levels = list(np.linspace(400e3, p["stress_max"], p["snapshots"]))
-        touched = None
-        while True:
-            s3.run(p["record_every"])
-            plate = float(s3.planes.force[1, 2]) / A
-            floor = -float(s3.planes.force[0, 2]) / A
-            zp = float(s3.planes.point[1, 2])
-            if touched is None and plate > 0:
-                touched = zp
-            fp = per_particle_forces(s3, 1)
-            ff = per_particle_forces(s3, 0)
-            rows.append({"step": s3.step, "plate_z": zp, "settlement": (touched - zp) if touched is not None else 0.0,
-                         "plate_stress": plate, "floor_stress": floor, "plate_contacts": fp.size,
-                         "floor_contacts": ff.size})
-            while levels and plate >= levels[0]:
-                snaps.append({"stress": plate, "plate": fp, "floor": ff})
-                levels.pop(0)
-            if plate >= p["stress_max"] or zp < 0.5:
-                break
-        import pandas as pd
+        if int(p["band_seeds"]) < 1 or int(p["band_seeds"]) == 2:
+            raise SceneError(f"miyata-uniaxial-3d: band_seeds={p['band_seeds']!r}; give 1 (no seed band) or at least 3 "
+                             "seeds (a 95 % prediction band needs a spread; the issue asks for 8)")
+        seeds = [int(p["seed"]) + k for k in range(int(p["band_seeds"]))]
+        if len(seeds) > 1:
+            from ..sweep import run_sweep
 
-        return CaseRun({}, {"curve": pd.DataFrame(rows), "snapshots": snaps, "weight": weight,
-                            "floor_settled": floor_settled, "n_particles": n_particles, "area": A,
-                            "settle_steps": (steps1, steps2), "dt": s3.dt, "plate_start": z0})
+            runs = run_sweep(protocol_run, [dict(p, seed=s) for s in seeds], workers=p.get("workers"))
+        else:
+            runs = [protocol_run(p)]
+        extras = dict(runs[0])
+        from ..engines.uniaxial3d import UniaxialRun
+
+        extras["band"] = {s: UniaxialRun.from_case(r) for s, r in zip(seeds, runs)}
+        extras["engines"] = self._engines(p) if (p["engine_refs"] and p["shape"] == "clumps") else {}
+        return CaseRun({}, extras)
+
+    engines = ("yade", "liggghts")
+    live = False
+
+    def _engines(self, p) -> dict:
+        """{engine: UniaxialRun} of YADE and LIGGGHTS on this protocol: the stored references of variant
+        ``seed<seed>`` (made with these parameters, else a clear error) or, with ``live``, run now."""
+        from ..engines import reference
+        from ..engines.uniaxial3d import UniaxialRun
+
+        variant = f"seed{p['seed']}"
+        stored = reference.available(self.name).get(variant, [])
+        out = {}
+        for e in self.engines:
+            if self.live:
+                import tempfile
+
+                from ..build import build
+
+                sc = insertion_scene(p)
+                with tempfile.TemporaryDirectory() as tmp:
+                    out[e] = engine_for(e, p).run(sc, tmp, timeout=7200, sim=build(sc))[0]
+            elif e in stored:
+                res = reference.load(self.name, variant, e, loader=UniaxialRun.load)
+                made = res.meta.get("params") or {}
+                if {k: made.get(k) for k in ENGINE_PARAMS} != {k: p[k] for k in ENGINE_PARAMS}:
+                    raise ValueError(f"stored reference {self.name}/{variant}/{e} was made with other parameters "
+                                     f"({ {k: made.get(k) for k in ENGINE_PARAMS if made.get(k) != p[k]} }); "
+                                     f"regenerate it (demflow reference {self.name} --engine {e}) or use the defaults")
+                out[e] = res
+        return out
+
+    def reference_plan(self):
+        from .base import ReferencePlan
+
+        if self.params["shape"] != "clumps":
+            return None
+        return ReferencePlan(self.name, self.merged(), lambda engine: (f"seed{self.params['seed']}",),
+                             lambda variant, p: insertion_scene(dict(p, seed=int(variant.removeprefix("seed")))),
+                             engine=lambda engine, variant: engine_for(engine, dict(self.merged(),
+                                                                                    seed=int(variant.removeprefix("seed")))))
+
+    def comparison_case(self):
+        return type(self)() if self.params["shape"] == "clumps" else None
 
     def checks(self, run, p):
         ex = run.extras
@@ -236,6 +378,44 @@ class MiyataUniaxial3D(Case):
             out.append(Check.info("particles on the floor at 400-600 kPa (mean over snapshots) per m²",
                                   float(np.mean([s["floor"].size for s in ex["snapshots"]])) / A, SRC,
                                   "The seed: about 257 bottom contacts on 100 m².", reference=2.57))
+        out += self._cross_code_checks(run, p)
+        return out
+
+    def _cross_code_checks(self, run, p) -> list:
+        """Each engine's statistics against demflow's seed band (issue 14 item 4), and the KS distance of its
+        plate forces from demflow's pooled seeds against the seeds' own spread."""
+        from scipy import stats
+
+        ex = run.extras
+        band = ex.get("band", {})
+        out = []
+        if len(band) < 3:
+            return out
+        per_seed = {s: run_statistics(u) for s, u in band.items()}
+        keys = list(next(iter(per_seed.values())))
+        ds, d_hi = ks_band(band)
+        pooled = np.concatenate([pooled_f(u) for u in band.values()])
+        for e in self.engines:
+            if e not in ex["engines"]:
+                out.append(Check.info(f"{e}: no stored run of this protocol (variant seed{p['seed']})", math.nan, SRC,
+                                      f"Make it with `demflow reference {self.name} --engine {e}`."))
+                continue
+            st = run_statistics(ex["engines"][e])
+            for k in keys:
+                lo, hi = band_of([v[k] for v in per_seed.values()])
+                v = st[k]
+                out.append(Check.condition(f"{e}: {k} = {v:.4g} inside demflow's seed band [{lo:.4g}, {hi:.4g}] "
+                                           f"({len(band)} seeds)", bool(lo <= v <= hi), v, SRC,
+                                           "Acceptance of issue 14: the beds differ between engines (chaos, and "
+                                           "LIGGGHTS inserts its own bed), so each engine's statistic is judged "
+                                           "against the 95 % prediction band of demflow's seeds.", kind="cross-code"))
+            fe = pooled_f(ex["engines"][e])
+            d = float(stats.ks_2samp(fe, pooled).statistic) if fe.size else math.nan
+            out.append(Check.condition(f"{e}: KS distance of the plate's f = F/<F> from demflow's pooled seeds = {d:.3g} "
+                                       f"≤ the seeds' own band {d_hi:.3g} (seed vs the others: "
+                                       f"{', '.join(f'{x:.3g}' for x in ds)})", bool(d <= d_hi), d, SRC,
+                                       "Acceptance of issue 14: the KS distance of an engine's distribution is judged "
+                                       "against how far one demflow seed's falls from the others'.", kind="cross-code"))
         return out
 
     def observables(self, run, p):
@@ -260,7 +440,27 @@ class MiyataUniaxial3D(Case):
                  "Δt [s]": ex["dt"], "loading steps": int(c.step.iloc[-1]),
                  "final plate stress [kPa]": c.plate_stress.iloc[-1] / 1e3,
                  "final settlement [mm]": c.settlement.iloc[-1] * 1e3}]
-        return [("Run", pd.DataFrame(rows))]
+        out = [("Run", pd.DataFrame(rows))]
+        band = ex.get("band", {})
+        if len(band) >= 3:
+            per_seed = {s: run_statistics(u) for s, u in band.items()}
+            keys = list(next(iter(per_seed.values())))
+            cols = {"demflow mean": {k: np.nanmean([v[k] for v in per_seed.values()]) for k in keys},
+                    "demflow s.d.": {k: np.nanstd([v[k] for v in per_seed.values()], ddof=1) for k in keys}}
+            bands = {k: band_of([v[k] for v in per_seed.values()]) for k in keys}
+            cols["band low"] = {k: bands[k][0] for k in keys}
+            cols["band high"] = {k: bands[k][1] for k in keys}
+            cols[f"demflow seed {p['seed']}"] = per_seed[p["seed"]]
+            for e, u in ex["engines"].items():
+                st = run_statistics(u)
+                cols[f"{e} (seed {p['seed']} protocol)"] = st
+            out.append((f"Statistics: demflow's {len(band)}-seed band vs the engines", pd.DataFrame(cols).loc[keys]))
+            wall = [{"engine": e, "wall time [s]": u.meta.get("wall_time_s"), "version": u.meta.get("engine_version"),
+                     "date": u.meta.get("date"), "settle steps": str(u.meta.get("settle_steps")),
+                     "particles": u.meta.get("n_particles")} for e, u in ex["engines"].items()]
+            if wall:
+                out.append(("Engine runs (stored references, reference_runs/miyata-uniaxial-3d/)", pd.DataFrame(wall)))
+        return out
 
     def figures(self, run, p, outdir):
         import matplotlib.pyplot as plt
@@ -298,6 +498,8 @@ class MiyataUniaxial3D(Case):
             ax.legend()
             paths.append(f"{outdir}/plate_pdf.png")
             save_figure(fig, paths[1])
+        if len(ex.get("band", {})) >= 3:
+            paths += engine_figures(ex, outdir)
         return paths
 
 
@@ -306,4 +508,73 @@ class MiyataUniaxial3DEllipsoids(MiyataUniaxial3D):
 
     name = "miyata-uniaxial-3d-ellipsoids"
     title = "Uniaxial compression of ellipsoids (Miyata §3.3, the seed's particle), reduced variant"
-    params = dict(MiyataUniaxial3D.params, shape="ellipsoids")
+    params = dict(MiyataUniaxial3D.params, shape="ellipsoids", band_seeds=1, engine_refs=0)
+
+
+ENGINE_COLOURS = {"yade": "tab:red", "liggghts": "tab:blue"}
+
+
+def engine_figures(ex, outdir) -> list:
+    """The figure page of issue 14 item 5: the engines' stress-settlement curves over demflow's seed band,
+    and the per-particle force PDFs on the plate and the floor with the q-model fits, linear and log axes."""
+    import matplotlib.pyplot as plt
+
+    from ..analysis.forces import fit_q_model, q_model_pdf
+    from ..plotting import save_figure
+
+    band = ex["band"]
+    paths = []
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    top = min(float(u.curve.plate_stress.max()) for u in band.values())
+    s_grid = np.linspace(0.0, top, 61)  # stress levels [Pa]: the settlement where each is first reached
+    rows = []
+    for u in band.values():
+        c = u.curve
+        first = np.maximum.accumulate(c.plate_stress.to_numpy())  # the running maximum: first reach
+        rows.append(np.interp(s_grid, first, c.settlement.to_numpy()))
+        ax.plot(c.settlement * 1e3, c.plate_stress / 1e3, color="0.75", lw=0.6)
+    rows = np.asarray(rows)
+    lohi = np.array([band_of(rows[:, k]) for k in range(len(s_grid))])
+    ax.fill_betweenx(s_grid / 1e3, lohi[:, 0] * 1e3, lohi[:, 1] * 1e3, color="0.85", alpha=0.7,
+                     label=f"demflow 95 % band ({len(band)} seeds; grey: each seed)")
+    for e, u in ex["engines"].items():
+        ax.plot(u.curve.settlement * 1e3, u.curve.plate_stress / 1e3, color=ENGINE_COLOURS.get(e, "k"), lw=1.4,
+                label=e)
+    for s in (100, 400):
+        ax.axhline(s, color="0.5", lw=0.6, ls=":")
+    ax.set_xlabel("settlement since the plate first touched [mm]")
+    ax.set_ylabel("plate stress [kPa]")
+    ax.set_title("stress-settlement: engines over demflow's seed band")
+    ax.legend(fontsize=8)
+    paths.append(save_figure(fig, f"{outdir}/engines_stress_settlement.png"))
+
+    fig, axs = plt.subplots(2, 2, figsize=(11, 8))
+    runs = {"demflow (all seeds)": None, **ex["engines"]}
+    for row, wall in enumerate(("plate", "floor")):
+        for col, scale in enumerate(("linear", "log")):
+            a = axs[row, col]
+            for name, u in runs.items():
+                f = np.concatenate([pooled_f(v, wall) for v in band.values()]) if u is None else pooled_f(u, wall)
+                if f.size < 2:
+                    continue
+                edges = np.linspace(0, max(4.0, f.max()), 17) if scale == "linear" else np.logspace(-2, 1, 16)
+                h, e_ = np.histogram(f, bins=edges, density=False)
+                dens = h / (f.size * np.diff(e_))
+                mid = 0.5 * (e_[1:] + e_[:-1]) if scale == "linear" else np.sqrt(e_[1:] * e_[:-1])
+                N = fit_q_model(f).N
+                colour = "k" if u is None else ENGINE_COLOURS.get(name, "k")
+                a.plot(mid, dens, "o-", color=colour, ms=3, lw=0.8, label=f"{name} (q-model N = {N:.2g})")
+                x = np.linspace(0.01, 4, 200) if scale == "linear" else np.logspace(-2, 1, 200)
+                a.plot(x, q_model_pdf(x, N), "--", color=colour, lw=0.8)
+            x = np.linspace(0.01, 4, 200) if scale == "linear" else np.logspace(-2, 1, 200)
+            a.plot(x, q_model_pdf(x, 3.0), ":", color="tab:green", label="q-model N = 3 (the seed's plate)")
+            if scale == "log":
+                a.set_xscale("log")
+                a.set_yscale("log")
+                a.set_ylim(1e-3, 10)
+            a.set_xlabel(f"f = F/<F> on the {wall}, per particle")
+            a.set_ylabel("P(f)")
+            a.legend(fontsize=7)
+    fig.suptitle("per-particle force PDFs at 400-600 kPa (dashed: each run's q-model fit)")
+    paths.append(save_figure(fig, f"{outdir}/engines_force_pdfs.png"))
+    return paths

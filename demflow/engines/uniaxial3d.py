@@ -87,7 +87,7 @@ def protocol_numbers(scene, sim, p: dict) -> dict:
                       stress_max=_finite(p["stress_max"], "stress_max"), snapshot_levels=_nums(levels, "levels"),
                       record_every=int(p["record_every"]), settle_max=int(p["settle_max"]),
                       settle_check_every=SETTLE_CHECK_EVERY, settle_ke_fraction=SETTLE_KE_FRACTION,
-                      plate_gap=PLATE_GAP, plate_z_min=0.5),
+                      plate_gap=PLATE_GAP, plate_z_min=_finite(p.get("plate_z_min", 0.5), "plate_z_min")),
     )
     if len(out["bodies"]["pos"]) != out["protocol"]["n_insert"]:
         raise EngineUnsupported(f"the insertion scene has {len(pos)} clumps, the protocol {p['n_insert']}")

@@ -1,0 +1,127 @@
+"""YADE on the miyata-uniaxial-3d protocol (demflow/engines/yade_uniaxial3d.py): a small bed (8 clumps,
+two lattice layers) run through the whole protocol, the deck's numbers, and the reader's refusals.
+
+The live tests are marked ``engines`` (the CI's engine stage); the others need no engine."""
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from demflow.build import build
+from demflow.cases import get_case
+from demflow.cases.miyata_uniaxial3d import insertion_scene, run_statistics
+from demflow.engines import EngineOutputError, EngineUnsupported
+from demflow.engines.uniaxial3d import PLATE_GAP, protocol_numbers, read_uniaxial_output
+from demflow.engines.yade_uniaxial3d import YadeUniaxial3DEngine
+
+# 8 clumps on the lattice's first two layers; the plate stops at 450 kPa (snapshots at 400 and 450 kPa)
+SMALL = {"n_insert": 8, "stress_max": 450e3, "snapshots": 2, "settle_max": 200000, "plate_z_min": 0.1,
+         "band_seeds": 1, "engine_refs": 0}
+
+
+def small_params():
+    return get_case("miyata-uniaxial-3d").merged(SMALL)
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    if shutil.which("yade") is None:
+        pytest.skip("yade is not installed (scripts/install-engines.sh)")
+    p = small_params()
+    sc = insertion_scene(p)
+    sim = build(sc)
+    work = tmp_path_factory.mktemp("yade-uniaxial")
+    run, info = YadeUniaxial3DEngine(p).run(sc, work, timeout=900, sim=sim)
+    return p, sim, run, work
+
+
+def test_the_deck_gets_demflows_members_and_validated_numbers(tmp_path):
+    p = small_params()
+    sc = insertion_scene(p)
+    sim = build(sc)
+    YadeUniaxial3DEngine(p).write_deck(sc, sim, tmp_path)
+    S = json.loads((tmp_path / "scene.json").read_text())
+    members = np.asarray(S["members"]).reshape(-1, 3)
+    assert np.array_equal(members, sim.spheres.pos)  # the clumps start where demflow's do, to the bit
+    assert S["template"]["mass"] == 191.0
+    assert (tmp_path / "deck.py").read_text().startswith("# demflow deck for YADE (2023.02a): miyata-uniaxial-3d")
+
+
+def test_an_ellipsoid_bed_is_refused_by_the_decks():
+    p = get_case("miyata-uniaxial-3d-ellipsoids").merged({"n_insert": 4})
+    sc = insertion_scene(p)
+    with pytest.raises(EngineUnsupported, match="ellipsoid"):
+        protocol_numbers(sc, build(sc), p)
+
+
+def _fake_output(d, curve="step,plate_z,settlement,plate_stress,floor_stress,plate_contacts,floor_contacts\n"
+                          "200,0.4,0.0,0.0,1.0,0,3\n"):
+    (d / "uniaxial_out.json").write_text(json.dumps(dict(
+        n_inserted=4, n_particles=3, weight=1.0, floor_settled=1.0, settle_steps=[5000, 5000], dt=1e-5,
+        plate_start=0.4, clump_mass=191.0, clump_inertia=[1.0, 2.0, 3.0])))
+    (d / "curve.csv").write_text(curve)
+    (d / "snapshots.csv").write_text("snapshot,stress,wall,force\n")
+
+
+def test_the_reader_refuses_missing_truncated_and_non_finite_output(tmp_path):
+    with pytest.raises(EngineOutputError, match="uniaxial_out.json"):
+        read_uniaxial_output(tmp_path, "yade", 4.0)
+    _fake_output(tmp_path)
+    assert read_uniaxial_output(tmp_path, "yade", 4.0).meta["n_particles"] == 3
+    (tmp_path / "uniaxial_out.json").write_text('{"n_inserted": 4, "n_part')
+    with pytest.raises(EngineOutputError, match="not valid JSON"):
+        read_uniaxial_output(tmp_path, "yade", 4.0)
+    _fake_output(tmp_path, curve="step,plate_z\n1,2\n")
+    with pytest.raises(EngineOutputError, match="columns"):
+        read_uniaxial_output(tmp_path, "yade", 4.0)
+    _fake_output(tmp_path, curve="step,plate_z,settlement,plate_stress,floor_stress,plate_contacts,floor_contacts\n"
+                                 "200,0.4,0.0,nan,1.0,0,3\n")
+    with pytest.raises(EngineOutputError, match="non-finite"):
+        read_uniaxial_output(tmp_path, "yade", 4.0)
+
+
+@pytest.mark.engines
+def test_yade_clumps_carry_demflows_mass_and_inertia(small_run):
+    p, sim, run, _ = small_run
+    assert run.meta["clump_mass"] == 191.0
+    sc = insertion_scene(p)
+    assert sorted(run.meta["clump_inertia"]) == sorted(sc.clumps.template.moments.tolist())
+    assert run.meta["principal_axis_alignment"] > 0.99
+
+
+@pytest.mark.engines
+def test_yade_bed_at_rest_carries_its_weight_on_the_floor(small_run):
+    _, _, run, _ = small_run
+    assert run.meta["n_particles"] == 8 and run.meta["settle_steps"][0] > 0 and run.meta["settle_steps"][1] > 0
+    assert abs(run.meta["floor_settled"] / run.meta["weight"] - 1.0) < 0.005  # tolerance miyata3d.self-weight
+
+
+@pytest.mark.engines
+def test_yade_plate_meets_the_bed_at_its_top(small_run):
+    """The plate's force first turns positive within one record's travel (plus an overlap) of the bed's top:
+    without the deck's watchdog YADE's collider missed the top clump until the plate had sunk 23 mm into it."""
+    p, _, run, _ = small_run
+    c = run.curve
+    first = c[c.plate_stress > 0].iloc[0]
+    travel = p["plate_speed"] * run.meta["dt"] * p["record_every"]
+    top = run.meta["plate_start"] - PLATE_GAP
+    assert top - 2 * travel - 1e-4 <= first.plate_z <= top
+
+
+@pytest.mark.engines
+def test_yade_curve_and_snapshots_are_consistent(small_run):
+    p, _, run, _ = small_run
+    c = run.curve
+    assert c.plate_stress.iloc[-1] >= p["stress_max"]
+    assert (c.plate_contacts <= run.meta["n_particles"]).all() and (c.floor_contacts <= run.meta["n_particles"]).all()
+    plate = run.snapshot_forces("plate")
+    assert len(plate) == 2
+    for k, f in enumerate(plate):
+        stress = run.snapshots[run.snapshots.snapshot == k].stress.iloc[0]
+        # per-particle normal forces sum to the plate's force (the plate is horizontal): to round-off
+        assert f.sum() / 4.0 == pytest.approx(stress, rel=1e-9)
+    st = run_statistics(run)
+    assert st["particles after trimming"] == 8 and 0 < st["particles on the plate (mean of snapshots)"] <= 8
