@@ -190,6 +190,14 @@ TOLERANCES = {
         5e-3,
         "Acceptance of issue 14: after settling, the floor stress equals the bed's weight over the area within "
         "0.5 % (statics of a bed at rest; the kinetic energy is below 1e-9 × weight × 1 m).", kind="exact"),
+    "miyata3d.band-informative": Tolerance(
+        0.5,
+        "A cross-code statistic of miyata-uniaxial-3d is judged against demflow's seed band only when the band's "
+        "half-width is at most this fraction of its mean: a wider band accepts any value within a factor of about "
+        "three of the mean, so passing it says nothing about agreement (such lines are shown as informative). "
+        "Chosen as the loosest band that still rejects a factor-of-two difference, not fitted to any run; the 2 × 2 m "
+        "box's settlement and q-model N bands are wider (measured 8 seeds: ±100-300 %), its contact counts, "
+        "plate heights and particle counts narrower (±3-40 %).", kind="cross-code"),
     "engines3d.round-off": Tolerance(
         1e-10,
         "3D engine conformance (conformance-3d): same model, same Δt, the same operations up to floating-point "

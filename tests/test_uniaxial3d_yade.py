@@ -125,3 +125,46 @@ def test_yade_curve_and_snapshots_are_consistent(small_run):
         assert f.sum() / 4.0 == pytest.approx(stress, rel=1e-9)
     st = run_statistics(run)
     assert st["particles after trimming"] == 8 and 0 < st["particles on the plate (mean of snapshots)"] <= 8
+
+
+def _synthetic(seed: int, height_shift: float = 0.0, first_touch: float = 0.0):
+    """A UniaxialRun with a plate first touched ``first_touch`` above 2.1 m that bites at 2.1 m and stiffens linearly, 78 particles,
+    4 on the plate and 12 on the floor at each of two snapshots (forces drawn from a gamma law, N = 3)."""
+    import pandas as pd
+
+    from demflow.engines.uniaxial3d import UniaxialRun
+
+    rng = np.random.default_rng(seed)
+    z = np.linspace(2.2, 1.9, 301) + height_shift
+    bite = 2.1 + height_shift + 0.01 * rng.standard_normal()
+    # a lone top particle carries 100 Pa for ``first_touch`` of plate travel before the bed bites
+    stress = np.where(z < bite, (bite - z) * 1e7, np.where(z < bite + first_touch, 100.0, 0.0))
+    touched = z[np.argmax(stress > 0)]
+    curve = pd.DataFrame({"step": np.arange(1, 302) * 200, "plate_z": z,
+                          "settlement": np.where(z <= touched, touched - z, 0.0), "plate_stress": stress,
+                          "floor_stress": stress + 3.7e4, "plate_contacts": 4, "floor_contacts": 12})
+    rows = [(k, 4e5 + k, wall, f) for k in range(2) for wall, n in (("plate", 4), ("floor", 12))
+            for f in rng.gamma(3.0, 1.0 / 3.0, n)]
+    snaps = pd.DataFrame(rows, columns=["snapshot", "stress", "wall", "force"])
+    return UniaxialRun(curve, snaps, dict(n_particles=78, plate_start=2.215 + height_shift, weight=1.0,
+                                          floor_settled=1.0))
+
+
+def test_cross_code_checks_judge_narrow_bands_and_only_show_wide_ones():
+    """An engine's bed 5 cm higher than every seed's is out of the plate-height band (that band is
+    narrow); a settlement band wider than the informative limit is shown, never counted."""
+    from demflow.cases.base import CaseRun
+
+    case = get_case("miyata-uniaxial-3d")
+    p = case.merged()
+    band = {s: _synthetic(s, first_touch=0.002 + 0.1 * (s % 3)) for s in range(1, 9)}
+    for shift, inside in ((0.0, True), (0.3, False)):
+        run = CaseRun({}, {"band": band, "engines": {"yade": _synthetic(99, height_shift=shift)}})
+        checks = case._cross_code_checks(run, p)
+        height = next(c for c in checks if c.name.startswith("yade: plate height at 400 kPa"))
+        assert height.kind == "cross-code" and height.passed is inside
+        settle = next(c for c in checks if c.name.startswith("yade: settlement at 400 kPa"))
+        assert settle.informative and "too wide" in settle.name
+    run = CaseRun({}, {"band": band, "engines": {}})
+    missing = case._cross_code_checks(run, p)
+    assert all(c.informative for c in missing) and any("no stored run" in c.name for c in missing)

@@ -423,3 +423,49 @@ FEATURES_3D: tuple[Feature, ...] = (
             yade=Expression("not in the 3D deck", CANNOT), liggghts=Expression("not in the 3D deck", CANNOT),
             uses=_fixed, remedy="make every sphere free (Spheres(fixed=None))"),
 )
+
+
+# The uniaxial protocol decks (miyata-uniaxial-3d: demflow.engines.yade_uniaxial3d, liggghts_uniaxial3d): what
+# each engine does differently from demflow on that case.  Rendered on the case's report page; the sphere decks
+# above are unaffected (none of these rows refuses a scene).
+FEATURES_UNIAXIAL_3D: tuple[Feature, ...] = (
+    Feature("clumps-3d", "rigid clumps of spheres", "Clumps: members in the template's principal frame, 191 kg and "
+            "the union's principal moments (voxel integration), no contacts inside a clump",
+            yade=Expression("appendClumped(discretization=15) of demflow's member spheres at demflow's insertion "
+                            "positions and orientations; mass and principal moments set to demflow's, axis by axis "
+                            "(|cos| ≥ 0.99 checked); each member's state.mass = its clump's (YADE's dashpot takes "
+                            "member masses, demflow's the body's)", EXACT),
+            liggghts=Expression("fix particletemplate/multisphere with demflow's mass and inertia_tensor, fix "
+                                "multisphere; the bed is LIGGGHTS's own (insert/pack: bodies come only from "
+                                "insertion fixes)", DIFFERS, "another random bed (compared statistically)"),
+            measured="mass and moments equal the template's to 1e-12 in both engines (tests/test_uniaxial3d_yade.py, "
+                     "tests/test_uniaxial3d_liggghts.py)"),
+    Feature("trim-3d", "removing the particles above the trim height", "the next stage is built from the kept "
+            "bodies (demflow.cases.miyata_uniaxial3d.next_stage)",
+            yade=Expression("deleteClumpBody, then a fresh InsertionSortCollider (2023.02a hangs after a deletion in "
+                            "a periodic scene)", EXACT),
+            liggghts=Expression("delete_atoms leaves orphan members in a periodic box: pass 1 counts the bodies at "
+                                "or below the trim height, pass 2 inserts that many into a fresh run", DIFFERS,
+                                "a new random bed of the kept size, not pass 1's bed minus its top")),
+    Feature("local-damping-uniaxial", "local non-viscous damping (uniaxial protocol)",
+            "Cundall's α_l = 0.3 on each component of a body's force and torque, gravity included (Miyata eq 33)",
+            yade=Expression("NewtonIntegrator(damping=α_l): the same rule, f(1 − α_l sgn(f(v + fΔt/2m))), "
+                            "dampGravity on", EXACT),
+            liggghts=Expression("none: fix multisphere has no damping option (documentation and source); the bed "
+                                "settles and is loaded with the dashpots only", DIFFERS,
+                                "see the cross-code checks of miyata-uniaxial-3d")),
+    Feature("plate-detection-yade", "plate contacts in a periodic bed of clumps", "every overlap with the plate is a "
+            "contact from the step it begins",
+            yade=Expression("InsertionSortCollider(allowBiggerThanPeriod=True) with a box wider than the period "
+                            "missed member-plate contacts (measured: the plate sank 23 mm into a member whose centre "
+                            "had x < 0, unseen, while utils.createInteraction found the overlap); the deck's watchdog "
+                            "creates any missing plate or floor contact every 10 steps", EXACT,
+                            "a contact starts at most 10 steps (5 µm of plate travel) late; the count is in the run's "
+                            "output (contacts_made_by_watchdog)"),
+            liggghts=Expression("mesh walls (fix wall/gran)", EXACT)),
+    Feature("shear-spring-uniaxial", "Mindlin shear spring (uniaxial protocol)", "incremental (YADE's), "
+            "demflow's default",
+            yade=Expression("Law2_ScGeom_MindlinPhys_Mindlin: incremental", EXACT),
+            liggghts=Expression("tangential history: total displacement × the current k_t", DIFFERS,
+                                "the stored force grows with the overlap under compression (feature shear-spring-3d)")),
+)

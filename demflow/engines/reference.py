@@ -71,7 +71,11 @@ def _generate(case, variant, engine, scene, params, dest: Path, timeout: float) 
         out = Path(tmp) / "ref"
         out.mkdir()
         for f in work.iterdir():
-            if f.name in ("scene.json", "engine.log", "log.liggghts") or f.name.startswith("deck") or f.suffix == ".stl":
+            # every input the engine declared, the deck(s), the engine's logs (one per invocation: engine.log or engine1.log, engine2.log, ...;
+            # LIGGGHTS's own log.liggghts, log1.liggghts, ...), the numbers and the meshes
+            if (f.name == "scene.json" or f.name in run.inputs or f.name.startswith("deck") or f.suffix == ".stl"
+                    or (f.name.startswith("engine") and f.suffix == ".log")
+                    or (f.name.startswith("log") and f.suffix == ".liggghts")):
                 shutil.copy2(f, out / f.name)
         res.meta.update(case=case, variant=variant, params=params)
         res.save(out)

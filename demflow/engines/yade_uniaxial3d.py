@@ -41,8 +41,9 @@ class YadeUniaxial3DEngine(YadeEngine):
 
     deck = "yade_uniaxial3d.py"
 
-    def __init__(self, params: dict):
+    def __init__(self, params: dict, benchmark: bool = False):
         self.params = dict(params)
+        self.benchmark = benchmark  # speed runs: the first settling stage only, timed in the deck (bench.json)
 
     def write_deck(self, scene, sim, deckdir: Path):
         from ..build3d import quat_to_matrix
@@ -75,12 +76,17 @@ class YadeUniaxial3DEngine(YadeEngine):
         S["wall_half_size"] = 100.0 * S["protocol"]["box"]
         S["discretization"] = DISCRETIZATION
         S["watch_every"] = WATCH_EVERY
+        S["benchmark"] = bool(self.benchmark)
         atomic_json(deckdir / "scene.json", S)
         deck = deckdir / "deck.py"
         deck.write_text(resources.files("demflow.engines.decks").joinpath(self.deck).read_text())
         return [deck, deckdir / "scene.json"]
 
     def read(self, scene, sim, outdir: Path):
+        if self.benchmark:
+            from .base3d import BenchmarkSummary, read_json_output
+
+            return BenchmarkSummary(read_json_output(Path(outdir) / "bench.json", "YADE"))
         run = read_uniaxial_output(outdir, "yade", float(self.params["box"]) ** 2)
         a = float(run.meta.get("principal_axis_alignment", math.nan))
         if not a >= AXIS_ALIGNMENT_MIN:

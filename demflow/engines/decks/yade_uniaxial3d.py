@@ -106,11 +106,25 @@ def settle():
     while done < int(P["settle_max"]):
         O.run(int(P["settle_check_every"]), True)
         done += int(P["settle_check_every"])
-        if kinetic() < float(P["settle_ke_fraction"]) * weight * 1.0:
+        ke = kinetic()
+        print(f"settling: {done} steps, kinetic energy {ke:.3g} J (at rest below "
+              f"{float(P['settle_ke_fraction']) * weight:.3g})", flush=True)
+        if ke < float(P["settle_ke_fraction"]) * weight * 1.0:
             return done
     return -done
 
 
+if S.get("benchmark"):
+    # speed runs (benchmarks/bench_uniaxial_engines.py): the first settling stage only, timed in the deck
+    import time
+
+    t0 = time.perf_counter()
+    steps1 = settle()
+    wall = time.perf_counter() - t0
+    with open("bench.json.tmp", "w") as fh:
+        json.dump(dict(steps=abs(steps1), wall_s=wall, clumps=len(clumps), kinetic=kinetic(), complete=True), fh)
+    os.replace("bench.json.tmp", "bench.json")
+    sys.exit(0)
 steps1 = settle()
 n_inserted = len(clumps)
 above = [c for c in clumps if O.bodies[c].state.pos[2] > float(P["trim"])]
@@ -210,6 +224,8 @@ while True:
         snaps += [[k, ps, "plate", v] for v in fp.values()] + [[k, ps, "floor", v] for v in ff.values()]
         snaps.append(None)  # marks the end of one snapshot
         levels.pop(0)
+    if step % (25 * int(P["record_every"])) == 0:
+        print(f"loading: {step} steps, plate at {zp:.4f} m, plate stress {ps / 1e3:.1f} kPa", flush=True)
     if ps >= float(P["stress_max"]) or zp < float(P["plate_z_min"]):
         break
 
