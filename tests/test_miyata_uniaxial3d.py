@@ -44,3 +44,19 @@ def test_an_unknown_shape_is_refused_naming_it():
     case = get_case("miyata-uniaxial-3d")
     with pytest.raises(df.SceneError, match=r"shape='spheres'.*'clumps'.*'ellipsoids'"):
         case.run(case.merged({"shape": "spheres"}))
+
+
+def test_bed_figures_write_a_vtk_bed_and_a_plate_force_map(tmp_path):
+    """The figure page's bed picture (matplotlib), its VTK file (member centres with radius and body) and
+    the plate force map of the last snapshot."""
+    from demflow.cases.miyata_uniaxial3d import bed_figures
+
+    rng = np.random.default_rng(0)
+    pos = rng.uniform(0.0, 2.0, (16, 3))
+    bed = {"pos": pos, "r": np.full(16, 0.15), "body": np.repeat(np.arange(2), 8), "plate_z": 2.1, "box": 2.0}
+    snaps = [{"stress": 4e5, "plate": np.array([1e5, 2e5]), "floor": np.array([1e5]),
+              "plate_xy": np.array([[0.5, 0.5], [2.5, 1.0]])}]  # an unwrapped centre is drawn inside the box
+    paths = bed_figures({"bed": bed, "snapshots": snaps}, tmp_path)
+    vtu = (tmp_path / "bed_end.vtu").read_text(errors="replace")
+    assert str(tmp_path / "bed_end.vtu") in paths and 'NumberOfPoints="16"' in vtu and "radius" in vtu and "body" in vtu
+    assert (tmp_path / "bed_and_plate_map.png").stat().st_size > 10000

@@ -168,3 +168,25 @@ def test_cross_code_checks_judge_narrow_bands_and_only_show_wide_ones():
     run = CaseRun({}, {"band": band, "engines": {}})
     missing = case._cross_code_checks(run, p)
     assert all(c.informative for c in missing) and any("no stored run" in c.name for c in missing)
+
+
+def test_an_engine_without_local_damping_is_counted_against_the_undamped_band():
+    """LIGGGHTS cannot express local damping (capabilities row local-damping-uniaxial): its statistics count
+    against demflow's band without it; against the damped band they are shown, not counted.  YADE is the
+    other way round."""
+    from demflow.cases.base import CaseRun
+
+    case = get_case("miyata-uniaxial-3d")
+    p = case.merged()
+    damped = {s: _synthetic(s) for s in range(1, 9)}
+    undamped = {s: _synthetic(s, height_shift=-0.3) for s in range(1, 9)}  # a bed 30 cm lower
+    run = CaseRun({}, {"band": damped, "band_undamped": undamped,
+                       "engines": {"liggghts": _synthetic(99, height_shift=-0.3), "yade": _synthetic(98)}})
+    checks = case._cross_code_checks(run, p)
+    lig = [c for c in checks if c.name.startswith("liggghts: plate height at 400 kPa")]
+    counted = [c for c in lig if not c.informative]
+    assert len(counted) == 1 and "no local damping" in counted[0].name and counted[0].passed
+    shown = [c for c in lig if c.informative]
+    assert len(shown) == 1 and "OUTSIDE" in shown[0].name
+    yade = [c for c in checks if c.name.startswith("yade: plate height at 400 kPa") and not c.informative]
+    assert len(yade) == 1 and "no local damping" not in yade[0].name and yade[0].passed

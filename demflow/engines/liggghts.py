@@ -382,17 +382,14 @@ def _read_rows(path: Path, ncol: int) -> np.ndarray:
     return np.array(rows, dtype=float).reshape(len(rows), ncol)
 
 
-def _read_local(path: Path, ncol: int, steps, ids: dict, *, atoms: int = 0, wall_col: int | None = None) -> dict:
-    """Parse a LAMMPS-style dump into {timestep: array (rows, ncol)}.
-
-    The dump must hold exactly the timesteps ``steps``, in order, each block a header (TIMESTEP, NUMBER OF
-    ENTRIES or ATOMS, BOX BOUNDS and its three lines, ENTRIES or ATOMS) and its rows of ``ncol`` finite
-    numbers; ``ids`` maps a column to the largest id it may hold (1-based atom ids, or from 0 in
-    ``wall_col``); with ``atoms`` every block lists atoms 1..atoms once each."""
+def dump_blocks(path: Path, ncol: int, atoms: bool = False):
+    """The blocks of a LAMMPS-style dump, in file order: (timestep, line number of the block's first row,
+    rows (count, ncol)).  Each block is a header (TIMESTEP, NUMBER OF ENTRIES or ATOMS, BOX BOUNDS and its
+    three lines, ENTRIES or ATOMS) and its rows of ``ncol`` finite numbers; anything else is refused
+    naming the file and the line."""
     lines = _text(path).splitlines()
     head = "ITEM: ATOMS" if atoms else "ITEM: ENTRIES"
     count_head = "ITEM: NUMBER OF ATOMS" if atoms else "ITEM: NUMBER OF ENTRIES"
-    out = {}
     k = 0
     while k < len(lines):
         if not lines[k].strip():
@@ -407,23 +404,34 @@ def _read_local(path: Path, ncol: int, steps, ids: dict, *, atoms: int = 0, wall
                 or not lines[k + 8].startswith(head):
             raise _bad_output(path, k + 1, f"the header of timestep {step} is not {count_head}, BOX BOUNDS, {head}")
         count = _whole(path, k + 4, lines[k + 3])
-        if step in out or (out and step < max(out)):
-            raise _bad_output(path, k + 2, f"timestep {step} is repeated or out of order")
         first = k + 9
         if first + count > len(lines):
             raise _bad_output(path, k + 4, f"timestep {step} announces {count} rows, the file holds "
                                            f"{len(lines) - first}")
         rows = np.array([_numbers(path, first + q + 1, lines[first + q], ncol) for q in range(count)],
                         dtype=float).reshape(count, ncol)
+        yield step, first + 1, rows
+        k = first + count
+
+
+def _read_local(path: Path, ncol: int, steps, ids: dict, *, atoms: int = 0, wall_col: int | None = None) -> dict:
+    """Parse a LAMMPS-style dump (:func:`dump_blocks`) into {timestep: array (rows, ncol)}.
+
+    The dump must hold exactly the timesteps ``steps``, in order; ``ids`` maps a column to the largest id
+    it may hold (1-based atom ids, or from 0 in ``wall_col``); with ``atoms`` every block lists atoms
+    1..atoms once each."""
+    out = {}
+    for step, row1, rows in dump_blocks(path, ncol, bool(atoms)):
+        if step in out or (out and step < max(out)):
+            raise _bad_output(path, row1 - 8, f"timestep {step} is repeated or out of order")
         for col, top in ids.items():
             v = rows[:, col]
             lo = 0 if col == wall_col else 1
             if not (np.all(v == np.round(v)) and np.all(v >= lo) and np.all(v <= top)):
-                raise _bad_output(path, first + 1, f"timestep {step}: column {col + 1} holds an id outside {lo}..{top}")
+                raise _bad_output(path, row1, f"timestep {step}: column {col + 1} holds an id outside {lo}..{top}")
         if atoms and not np.array_equal(np.sort(rows[:, 0]), np.arange(1, atoms + 1)):
-            raise _bad_output(path, first + 1, f"timestep {step} does not list atoms 1..{atoms} once each")
+            raise _bad_output(path, row1, f"timestep {step} does not list atoms 1..{atoms} once each")
         out[step] = rows
-        k = first + count
     if list(out) != [int(s) for s in steps]:
         raise _bad_output(path, None, f"it holds timesteps {_span(list(out))}, the deck wrote {_span(list(steps))}")
     return out

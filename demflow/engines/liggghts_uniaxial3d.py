@@ -27,6 +27,8 @@ How the protocol is expressed:
   sources none; ``fix viscous`` is viscous and acts on member spheres).  This engine runs with
   the contact dashpots only: a difference between the engines (settling takes longer, the loading
   curve is the dashpots' only).
+- Neighbour lists: ``neighbor`` skin = demflow's neighbour margin (``protocol_numbers``'s ``skin``),
+  checked every step (``neigh_modify delay 0``).
 - Box periodic in x and y (``boundary p p f``), the floor a two-triangle square mesh at z = 0
   covering the period, the plate the same square with normal −z, moved by ``fix move/mesh
   linear/variable`` (static while settling, then lowered to its start height at up to
@@ -69,7 +71,7 @@ import pandas as pd
 
 from .base import (EngineFailed, EngineOutputError, EngineRun, EngineTimeout, EngineUnsupported, atomic_json,
                    sha256)
-from .liggghts import LiggghtsEngine, _bad_output, _numbers, _read_rows, _text, _whole
+from .liggghts import LiggghtsEngine, _bad_output, _numbers, _read_rows, _text, dump_blocks
 from .liggghts3d import _f, restitution_for_zeta
 from .uniaxial3d import CURVE_COLUMNS, SNAPSHOT_COLUMNS, protocol_numbers, read_uniaxial_output
 
@@ -185,7 +187,7 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
             "atom_style granular", "atom_modify map array sort 0 0", "dimension 3", "boundary p p f", "newton off",
             "communicate single vel yes", "units si", "hard_particles yes", "processors 1 1 1",
             f"region box block 0.0 {_f(L)} 0.0 {_f(L)} {_f(-2.0 * rb)} {_f(z_top)} units box", "create_box 2 box",
-            f"neighbor {_f(0.1 * float(np.min(T['radii'])))} bin", "neigh_modify delay 0",
+            f"neighbor {_f(N['skin'])} bin", "neigh_modify delay 0",  # demflow's neighbour margin
             f"fix m1 all property/global youngsModulus peratomtype {_f(M[pm]['young'])} {_f(M[wm]['young'])}",
             f"fix m2 all property/global poissonsRatio peratomtype {_f(M[pm]['poisson'])} {_f(M[wm]['poisson'])}",
             f"fix m3 all property/global coefficientRestitution peratomtypepair 2 {_f(e_pp)} {_f(e_pw)} {_f(e_pw)} "
@@ -534,34 +536,9 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
 
 
 def _blocks(path: Path, ncol: int, atoms: bool = False) -> dict:
-    """{timestep: rows} of a LAMMPS dump (``dump local``/``custom``), every row ``ncol`` finite numbers."""
-    lines = _text(path).splitlines()
-    head = "ITEM: ATOMS" if atoms else "ITEM: ENTRIES"
-    count_head = "ITEM: NUMBER OF ATOMS" if atoms else "ITEM: NUMBER OF ENTRIES"
-    out = {}
-    k = 0
-    while k < len(lines):
-        if not lines[k].strip():
-            k += 1
-            continue
-        if lines[k].rstrip() != "ITEM: TIMESTEP":
-            raise _bad_output(path, k + 1, f"expected 'ITEM: TIMESTEP', found {lines[k][:60]!r}")
-        if k + 8 >= len(lines):
-            raise _bad_output(path, k + 1, "a block header is cut short")
-        step = _whole(path, k + 2, lines[k + 1])
-        if lines[k + 2].rstrip() != count_head or not lines[k + 4].startswith("ITEM: BOX BOUNDS") \
-                or not lines[k + 8].startswith(head):
-            raise _bad_output(path, k + 1, f"the header of timestep {step} is not {count_head}, BOX BOUNDS, {head}")
-        count = _whole(path, k + 4, lines[k + 3])
-        first = k + 9
-        if first + count > len(lines):
-            raise _bad_output(path, k + 4, f"timestep {step} announces {count} rows, the file holds "
-                                           f"{len(lines) - first}")
-        rows = np.array([_numbers(path, first + q + 1, lines[first + q], ncol) for q in range(count)],
-                        dtype=float).reshape(count, ncol)
-        out[step] = rows  # a repeated step (a run's setup) keeps the later block: the same state
-        k = first + count
-    return out
+    """{timestep: rows} of a LAMMPS dump (``dump local``/``custom``; :func:`demflow.engines.liggghts.dump_blocks`),
+    every row ``ncol`` finite numbers; a repeated step (a run's setup) keeps the later block: the same state."""
+    return {step: rows for step, _, rows in dump_blocks(path, ncol, atoms)}
 
 
 __all__ = ["LiggghtsUniaxial3DEngine"]

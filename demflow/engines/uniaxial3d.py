@@ -59,7 +59,8 @@ def protocol_numbers(scene, sim, p: dict) -> dict:
     ζ_n, ζ_t), ``template`` (member centres in the principal frame [m], radii [m], mass [kg], principal
     moments [kg m²]), ``bodies`` (centres of mass [m], quaternions w, x, y, z body → world),
     ``protocol`` (box side, trim height, plate speed, stress_max, snapshot levels, record_every,
-    settle_max, the at-rest rule), ``dt``, ``gravity``, ``local_damping``.
+    settle_max, the at-rest rule), ``dt``, ``gravity``, ``local_damping``, ``skin`` (demflow's neighbour
+    margin [m], which LIGGGHTS's deck uses as its ``neighbor`` skin).
     """
     from .base import EngineUnsupported
     from .base3d import _nums, scene3d_numbers
@@ -76,7 +77,7 @@ def protocol_numbers(scene, sim, p: dict) -> dict:
     if len(mats) != 1:
         raise EngineUnsupported("the uniaxial decks take clumps of one material")
     out = dict(
-        name=S["name"], dt=S["dt"], gravity=S["gravity"], local_damping=S["local_damping"],
+        name=S["name"], dt=S["dt"], gravity=S["gravity"], local_damping=S["local_damping"], skin=S["skin"],
         materials=S["materials"], sphere_pairs=S["sphere_pairs"], plane_pairs=S["plane_pairs"],
         shear_spring=S["shear_spring"], friction_cap=S["friction_cap"], particle_material=mats[0], plane_material=S["planes"][0]["material"],
         template=dict(centres=_nums(T.centres, "template centres"), radii=_nums(T.radii, "template radii"),

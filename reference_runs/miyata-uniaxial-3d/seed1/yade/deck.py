@@ -114,6 +114,17 @@ def settle():
     return -done
 
 
+if S.get("benchmark"):
+    # speed runs (benchmarks/bench_uniaxial_engines.py): the first settling stage only, timed in the deck
+    import time
+
+    t0 = time.perf_counter()
+    steps1 = settle()
+    wall = time.perf_counter() - t0
+    with open("bench.json.tmp", "w") as fh:
+        json.dump(dict(steps=abs(steps1), wall_s=wall, clumps=len(clumps), kinetic=kinetic(), complete=True), fh)
+    os.replace("bench.json.tmp", "bench.json")
+    sys.exit(0)
 steps1 = settle()
 n_inserted = len(clumps)
 above = [c for c in clumps if O.bodies[c].state.pos[2] > float(P["trim"])]
