@@ -55,6 +55,17 @@ def _atomic_write(path: Path, write):
             os.remove(tmp)
 
 
+def save_tables(out, tables: dict, meta_name: str, meta: dict, indent: int = 2) -> Path:
+    """Each DataFrame of ``tables`` as ``<name>.parquet`` and ``meta`` as JSON ``meta_name`` into directory
+    ``out``, every file written atomically (the 3D trajectory and uniaxial run objects)."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    for name, df in tables.items():
+        _atomic_write(out / f"{name}.parquet", lambda p, df=df: df.to_parquet(p, index=False))
+    _atomic_write(out / meta_name, lambda p: Path(p).write_text(json.dumps(meta, indent=indent, default=str)))
+    return out
+
+
 @dataclass
 class Results:
     """The tables of one run plus its metadata (engine, scene, dt, ...)."""

@@ -154,6 +154,19 @@ def test_report_counts_info_apart(tmp_path):
     assert ">info<" in (tmp_path / "thesis-one-disc" / "index.html").read_text()
 
 
+def test_report_shows_images_and_links_other_outputs(tmp_path):
+    """A case's figure list may hold data files (miyata-uniaxial-3d's bed_end.vtu): linked, not drawn."""
+    from demflow.report import write_report
+
+    summary = dict(generated="now", python="3", machine="m", cases={"thesis-one-disc": dict(
+        title="t", source="s", params={}, wall_time_s=0.0, passed=True, assumptions=[],
+        figures=["a.png", "bed_end.vtu"], checks=[])})
+    write_report(summary, tmp_path)
+    page = (tmp_path / "thesis-one-disc" / "index.html").read_text()
+    assert "<img src='a.png'>" in page and "<img src='bed_end.vtu'>" not in page
+    assert "<a href='bed_end.vtu'>" in page
+
+
 # -- hooks and the typed return
 def test_reference_and_compare_choices_come_from_the_registry():
     with_engines = {"cs-nine-disc", "cs-photoelastic", "conformance-3d", "miyata-uniaxial-3d"}

@@ -159,15 +159,9 @@ class Trajectory3D:
 
     def save(self, out) -> Path:
         """Parquet tables + meta.json into directory ``out`` (each file written atomically)."""
-        from ..results import _atomic_write
+        from ..results import save_tables
 
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        for name in ("spheres", "planes"):
-            df = getattr(self, name)
-            _atomic_write(out / f"{name}.parquet", lambda p, df=df: df.to_parquet(p, index=False))
-        _atomic_write(out / "meta.json", lambda p: Path(p).write_text(json.dumps(self.meta, indent=2, default=str)))
-        return out
+        return save_tables(out, {"spheres": self.spheres, "planes": self.planes}, "meta.json", self.meta)
 
     @classmethod
     def load(cls, out) -> "Trajectory3D":

@@ -111,15 +111,9 @@ class UniaxialRun:
 
     def save(self, out) -> Path:
         """curve.parquet, snapshots.parquet and uniaxial.json into ``out`` (each written atomically)."""
-        from ..results import _atomic_write
+        from ..results import save_tables
 
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        for name in ("curve", "snapshots"):
-            df = getattr(self, name)
-            _atomic_write(out / f"{name}.parquet", lambda q, df=df: df.to_parquet(q, index=False))
-        _atomic_write(out / "uniaxial.json", lambda q: Path(q).write_text(json.dumps(self.meta, indent=1, default=str)))
-        return out
+        return save_tables(out, {"curve": self.curve, "snapshots": self.snapshots}, "uniaxial.json", self.meta, indent=1)
 
     @classmethod
     def load(cls, out) -> "UniaxialRun":

@@ -23,6 +23,8 @@ from ..manifest import describe
 from ..cases import CASES  # noqa: E402
 from ..cases.base import INFO, MISS, counted, kind_counts, kind_of, validation_passes  # noqa: E402
 
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".gif")  # a case's other outputs (e.g. .vtu) are linked, not shown
+
 
 def check_counts(checks) -> str:
     """"n/m checks pass[, c/d calibrations][, k informative]" for a case's checks (Check objects or
@@ -192,7 +194,9 @@ def write_report(summary, outdir="reports/validation"):
                         for title, body in (CASES[name].page_sections() if name in CASES else []))
         for t in c.get("tables", []):  # pandas' to_html escapes the cells
             extra += f"<h2>{html.escape(t['title'])}</h2>{t['html']}"
-        figs = "".join(f"<p><img src='{html.escape(f)}'></p>" for f in c["figures"])
+        figs = "".join(f"<p><img src='{html.escape(f)}'></p>" if f.lower().endswith(IMAGE_SUFFIXES) else
+                       f"<p class='small'>data file for other tools: <a href='{html.escape(f)}'>{html.escape(f)}</a></p>"
+                       for f in c["figures"])
         if c.get("physics"):
             extra += ("<h2>What was built (physics manifest, meta.json 'physics')</h2><table><tr><th>variant</th>"
                       "<th>kernels, history, fluid, damping, state</th></tr>" + "".join(
