@@ -173,7 +173,7 @@ def test_reference_and_compare_choices_come_from_the_registry():
     assert set(reference_cases()) == with_engines  # not the ellipsoid variant: no engine expresses ellipsoids
     assert set(comparison_cases()) == with_engines
     plan_u = CASES["miyata-uniaxial-3d"].reference_plan()
-    assert plan_u.variants("yade") == ("seed1",) and plan_u.engine("liggghts", "seed1").params["seed"] == 1
+    assert plan_u.variants("yade") == ("seed1", "seed2") and plan_u.engine("liggghts", "seed2").params["seed"] == 2
     plan3 = CASES["conformance-3d"].reference_plan()
     assert plan3.engine("yade", "oblique-plane-r2").compensate_walls is False  # the engine object comes from the plan
     plan = CASES["cs-nine-disc"].reference_plan()

@@ -207,6 +207,17 @@ def ks_band(band: dict, wall: str = "plate") -> tuple[np.ndarray, float]:
 
 
 
+def engine_of(label: str) -> str:
+    """The engine of a run label ("yade seed2" → "yade")."""
+    return label.split()[0]
+
+
+def engine_variants(p) -> tuple[str, ...]:
+    """The stored engine runs of this protocol: one per seed, seed .. seed + engine_seeds - 1 (each engine run
+    is one draw of a chaotic bed, judged like one more demflow seed)."""
+    return tuple(f"seed{int(p['seed']) + k}" for k in range(int(p["engine_seeds"])))
+
+
 def engine_band(ex, engine: str) -> dict:
     """The demflow seed band with ``engine``'s physics: without local damping for an engine whose
     capabilities row local-damping-uniaxial says it differs (LIGGGHTS), else the case's own band."""
@@ -306,20 +317,22 @@ class MiyataUniaxial3D(Case):
         "Cundall local damping 0.3 and dashpots from e = 0.3 throughout (the seed does not state its damping).",
         "Contacts and forces on the plate and floor are per particle (members summed).",
         "Seed band: the protocol run for seeds seed .. seed + band_seeds - 1 (different random orientations on the "
-        "insertion lattice), 95 % prediction band of one more seed (t distribution); the engines' stored seed-1 runs "
-        "are judged against it. YADE starts from demflow's lattice and orientations; LIGGGHTS inserts its own bed "
+        "insertion lattice), 95 % prediction band of one more seed (t distribution); each engine's stored runs of "
+        "seeds seed .. seed + engine_seeds - 1 are judged against it, each as one more draw (a chaotic bed: one "
+        "engine run is one sample). YADE starts from demflow's lattice and orientations; LIGGGHTS inserts its own bed "
         "and has no local damping (the capabilities rows below). A band wider than ±50 % of its mean is shown, not "
         "counted (tolerance miyata3d.band-informative).",
         "The stress-settlement curve is compared at fixed stresses (100-600 kPa), as the plate's height and as the "
         "settlement since first touch; the settlement bands are too wide to judge in this box.",
     )
-    # slow: 8 seeds (the seed band) took 616 s here with 2 Dask workers (2026-11-24), and in the 2 × 2 m box only
+    # slow: 16 protocol runs (8 seeds, with and without local damping) took 531 s here with 2 Dask workers
+    # (2026-11-25), and in the 2 × 2 m box only
     # 2-6 particles touch the plate, whose stress rises and collapses as they slip (the monotone check fails);
     # left out of a plain `demflow validate` until a larger box is affordable
     slow = True
     params = dict(shape="clumps", box=2.0, n_insert=80, K=8, seed=1, trim=2.0, plate_speed=0.02, stress_max=600e3, dt_fraction=0.2,
                   local_damping=0.3, young=7e10, record_every=200, settle_max=400000, snapshots=10, plate_z_min=0.5, band_seeds=8,
-                  engine_refs=1, undamped_band=1, workers=None)
+                  engine_refs=1, engine_seeds=2, undamped_band=1, workers=None)
 
     def run(self, p) -> CaseRun:
         from ..scene import SceneError
@@ -363,31 +376,34 @@ class MiyataUniaxial3D(Case):
                  as_html(FEATURES_UNIAXIAL_3D))]
 
     def _engines(self, p) -> dict:
-        """{engine: UniaxialRun} of YADE and LIGGGHTS on this protocol: the stored references of variant
-        ``seed<seed>`` (made with these parameters, else a clear error) or, with ``live``, run now."""
+        """{"<engine> seed<N>": UniaxialRun} of YADE and LIGGGHTS on this protocol, one per variant of
+        :func:`engine_variants`: the stored references (made with these parameters, else a clear error) or,
+        with ``live``, run now."""
         from ..engines import reference
         from ..engines.uniaxial3d import UniaxialRun
 
-        variant = f"seed{p['seed']}"
-        stored = reference.available(self.name).get(variant, [])
+        stored = reference.available(self.name)
         out = {}
-        for e in self.engines:
-            if self.live:
-                import tempfile
+        for variant in engine_variants(p):
+            q = dict(p, seed=int(variant.removeprefix("seed")))
+            for e in self.engines:
+                if self.live:
+                    import tempfile
 
-                from ..build import build
+                    from ..build import build
 
-                sc = insertion_scene(p)
-                with tempfile.TemporaryDirectory() as tmp:
-                    out[e] = engine_for(e, p).run(sc, tmp, timeout=7200, sim=build(sc))[0]
-            elif e in stored:
-                res = reference.load(self.name, variant, e, loader=UniaxialRun.load)
-                made = res.meta.get("params") or {}
-                if {k: made.get(k) for k in ENGINE_PARAMS} != {k: p[k] for k in ENGINE_PARAMS}:
-                    raise ValueError(f"stored reference {self.name}/{variant}/{e} was made with other parameters "
-                                     f"({ {k: made.get(k) for k in ENGINE_PARAMS if made.get(k) != p[k]} }); "
-                                     f"regenerate it (demflow reference {self.name} --engine {e}) or use the defaults")
-                out[e] = res
+                    sc = insertion_scene(q)
+                    with tempfile.TemporaryDirectory() as tmp:
+                        out[f"{e} {variant}"] = engine_for(e, q).run(sc, tmp, timeout=7200, sim=build(sc))[0]
+                elif e in stored.get(variant, []):
+                    res = reference.load(self.name, variant, e, loader=UniaxialRun.load)
+                    made = res.meta.get("params") or {}
+                    if {k: made.get(k) for k in ENGINE_PARAMS} != {k: p[k] for k in ENGINE_PARAMS}:
+                        raise ValueError(f"stored reference {self.name}/{variant}/{e} was made with other parameters "
+                                         f"({ {k: made.get(k) for k in ENGINE_PARAMS if made.get(k) != p[k]} }); "
+                                         f"regenerate it (demflow reference {self.name} --engine {e}) or use the "
+                                         "defaults")
+                    out[f"{e} {variant}"] = res
         return out
 
     def reference_plan(self):
@@ -395,7 +411,7 @@ class MiyataUniaxial3D(Case):
 
         if self.params["shape"] != "clumps":
             return None
-        return ReferencePlan(self.name, self.merged(), lambda engine: (f"seed{self.params['seed']}",),
+        return ReferencePlan(self.name, self.merged(), lambda engine: engine_variants(self.params),
                              lambda variant, p: insertion_scene(dict(p, seed=int(variant.removeprefix("seed")))),
                              engine=lambda engine, variant: engine_for(engine, dict(self.merged(),
                                                                                     seed=int(variant.removeprefix("seed")))))
@@ -448,16 +464,17 @@ class MiyataUniaxial3D(Case):
         if len(ex.get("band", {})) < 3:
             return out
         for e in self.engines:
-            if e not in ex["engines"]:
-                out.append(Check.info(f"{e}: no stored run of this protocol (variant seed{p['seed']})", math.nan, SRC,
-                                      f"Make it with `demflow reference {self.name} --engine {e}`."))
+            runs = {label: u for label, u in ex["engines"].items() if engine_of(label) == e}
+            if not runs:
+                out.append(Check.info(f"{e}: no stored run of this protocol (variants {', '.join(engine_variants(p))})",
+                                      math.nan, SRC, f"Make them with `demflow reference {self.name} --engine {e}`."))
                 continue
             matched = engine_band(ex, e)
-            for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
-                if len(band) < 3:
-                    continue
-                counted = band is matched
-                out += self._band_checks(e, ex["engines"][e], band, name, counted)
+            for label, u in runs.items():
+                for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
+                    if len(band) < 3:
+                        continue
+                    out += self._band_checks(label, u, band, name, band is matched)
         return out
 
     @staticmethod
@@ -554,9 +571,9 @@ class MiyataUniaxial3D(Case):
                 cols["no local damping: band high"] = {k: bands_u[k][1] for k in keys}
             for e, u in ex["engines"].items():
                 st = run_statistics(u)
-                cols[f"{e} (seed {p['seed']} protocol)"] = st
+                cols[e] = st
             out.append((f"Statistics: demflow's {len(band)}-seed band vs the engines", pd.DataFrame(cols).loc[keys]))
-            wall = [{"engine": e, "wall time [s]": u.meta.get("wall_time_s"), "version": u.meta.get("engine_version"),
+            wall = [{"engine run": e, "wall time [s]": u.meta.get("wall_time_s"), "version": u.meta.get("engine_version"),
                      "date": u.meta.get("date"), "settle steps": str(u.meta.get("settle_steps")),
                      "particles": u.meta.get("n_particles")} for e, u in ex["engines"].items()]
             if wall:
@@ -647,9 +664,10 @@ def engine_figures(ex, outdir) -> list:
         a.fill_betweenx(s_grid / 1e3, lohi[:, 0] * scale, lohi[:, 1] * scale, color="0.85", alpha=0.7,
                         label=f"demflow 95 % band ({len(band)} seeds; grey: each seed)")
     for e, u in ex["engines"].items():
-        ax.plot(u.curve.settlement * 1e3, u.curve.plate_stress / 1e3, color=ENGINE_COLOURS.get(e, "k"), lw=1.4,
-                label=e)
-        ah.plot(u.curve.plate_z, u.curve.plate_stress / 1e3, color=ENGINE_COLOURS.get(e, "k"), lw=1.4, label=e)
+        style = "-" if e.endswith("seed1") or " " not in e else "--"
+        colour = ENGINE_COLOURS.get(engine_of(e), "k")
+        ax.plot(u.curve.settlement * 1e3, u.curve.plate_stress / 1e3, style, color=colour, lw=1.4, label=e)
+        ah.plot(u.curve.plate_z, u.curve.plate_stress / 1e3, style, color=colour, lw=1.4, label=e)
     for a in (ax, ah):
         for s in (100, 400):
             a.axhline(s, color="0.5", lw=0.6, ls=":")
@@ -676,7 +694,7 @@ def engine_figures(ex, outdir) -> list:
                 dens = h / (f.size * np.diff(e_))
                 mid = 0.5 * (e_[1:] + e_[:-1]) if scale == "linear" else np.sqrt(e_[1:] * e_[:-1])
                 N = fit_q_model(f).N
-                colour = "k" if u is None else ENGINE_COLOURS.get(name, "k")
+                colour = "k" if u is None else ENGINE_COLOURS.get(engine_of(name), "k")
                 keep = dens > 0 if scale == "log" else np.ones(dens.size, bool)  # empty bins off the log axes
                 a.plot(mid[keep], dens[keep], "o-", color=colour, ms=3, lw=0.8, label=f"{name} (q-model N = {N:.2g})")
                 x = np.linspace(0.01, 4, 200) if scale == "linear" else np.logspace(-2, 1, 200)
