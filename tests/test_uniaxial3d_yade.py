@@ -164,7 +164,13 @@ def test_cross_code_checks_judge_narrow_bands_and_only_show_wide_ones():
         height = next(c for c in checks if c.name.startswith("yade: plate height at 400 kPa"))
         assert height.kind == "cross-code" and height.passed is inside
         settle = next(c for c in checks if c.name.startswith("yade: settlement at 400 kPa"))
-        assert settle.informative and "too wide" in settle.name
+        assert settle.informative and "too wide" in settle.name  # inside a band too wide to judge: not a pass
+    # outside even the wide band: a counted miss, never hidden as informative
+    far_run = _synthetic(97)
+    far_run.curve["settlement"] *= 30.0  # about 1.2 m at 400 kPa: far above the band's top (~0.4 m)
+    run = CaseRun({}, {"band": band, "engines": {"yade": far_run}})
+    far = next(c for c in case._cross_code_checks(run, p) if c.name.startswith("yade: settlement at 400 kPa"))
+    assert far.kind == "cross-code" and not far.passed
     run = CaseRun({}, {"band": band, "engines": {}})
     missing = case._cross_code_checks(run, p)
     assert all(c.informative for c in missing) and any("no stored run" in c.name for c in missing)
