@@ -207,6 +207,13 @@ def ks_band(band: dict, wall: str = "plate") -> tuple[np.ndarray, float]:
 
 
 
+def band_summary(band: dict):
+    """What every engine run is judged against, computed once per band: each seed's :func:`run_statistics`,
+    the KS distances of :func:`ks_band`, and the seeds' pooled plate forces."""
+    return ({s: run_statistics(v) for s, v in band.items()}, ks_band(band),
+            np.concatenate([pooled_f(v) for v in band.values()]))
+
+
 def engine_of(label: str) -> str:
     """The engine of a run label ("yade seed2" → "yade")."""
     return label.split()[0]
@@ -463,6 +470,7 @@ class MiyataUniaxial3D(Case):
         out = []
         if len(ex.get("band", {})) < 3:
             return out
+        summaries = {id(b): band_summary(b) for b in (ex["band"], ex.get("band_undamped", {})) if len(b) >= 3}
         for e in self.engines:
             runs = {label: u for label, u in ex["engines"].items() if engine_of(label) == e}
             if not runs:
@@ -474,16 +482,17 @@ class MiyataUniaxial3D(Case):
                 for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
                     if len(band) < 3:
                         continue
-                    out += self._band_checks(label, u, band, name, band is matched)
+                    out += self._band_checks(label, u, summaries[id(band)], name, band is matched)
         return out
 
     @staticmethod
-    def _band_checks(e, u, band, name, counted) -> list:
-        """``u``'s statistics and plate-force KS distance against demflow's seed ``band``; counted only when
-        the band has the engine's physics (``counted``; else informative: what the model difference does)."""
+    def _band_checks(e, u, summary, name, counted) -> list:
+        """``u``'s statistics and plate-force KS distance against demflow's seed band (its :func:`band_summary`);
+        counted only when the band has the engine's physics (``counted``; else informative: what the model
+        difference does)."""
         from scipy import stats
 
-        per_seed = {s: run_statistics(v) for s, v in band.items()}
+        per_seed, (ds, d_hi), pooled = summary
         keys = list(next(iter(per_seed.values())))
         st = run_statistics(u)
         label = f"demflow's seed band{name}"
@@ -515,8 +524,6 @@ class MiyataUniaxial3D(Case):
                                            "LIGGGHTS inserts its own bed), so each engine's statistic is judged "
                                            "against the 95 % prediction band of demflow's seeds with the engine's "
                                            "physics.", kind="cross-code"))
-        ds, d_hi = ks_band(band)
-        pooled = np.concatenate([pooled_f(v) for v in band.values()])
         fe = pooled_f(u)
         d = float(stats.ks_2samp(fe, pooled).statistic) if fe.size else math.nan
         what = (f"{e}: KS distance of the plate's f = F/<F> from {label} pooled = {d:.3g} "
