@@ -60,3 +60,173 @@ def test_bed_figures_write_a_vtk_bed_and_a_plate_force_map(tmp_path):
     vtu = (tmp_path / "bed_end.vtu").read_text(errors="replace")
     assert str(tmp_path / "bed_end.vtu") in paths and 'NumberOfPoints="16"' in vtu and "radius" in vtu and "body" in vtu
     assert (tmp_path / "bed_and_plate_map.png").stat().st_size > 10000
+
+
+# a small protocol (4 clumps after trimming, fast plate) for the resume and micro-state tests: ~3 s
+SMALL = dict(box=1.6, n_insert=12, trim=1.0, settle_max=20000, stress_max=450e3, snapshots=3, plate_speed=0.2,
+             record_every=200)
+
+
+def _small(**kw):
+    return get_case("miyata-uniaxial-3d").merged(dict(SMALL, **kw))
+
+
+def _protocol(p):
+    from demflow.cases.miyata_uniaxial3d import protocol_run
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", df.UnsafeTimeStepWarning)
+        return protocol_run(p)
+
+
+# calls of Simulation3D.run: 4 settling chunks per stage, then one per record of the loading (11 records)
+@pytest.mark.parametrize("stop_after", [2, 6, 16])  # in the first settling, in the second, in the loading
+def test_an_interrupted_protocol_resumes_from_its_checkpoints_to_the_bit(tmp_path, monkeypatch, stop_after):
+    import demflow.cases.miyata_uniaxial3d as m
+    from demflow.simulation3d import Simulation3D
+
+    monkeypatch.setattr(m, "CHECKPOINT_STEPS", 1000)  # a checkpoint at every settling chunk and every 5 records
+    whole = _protocol(_small())
+    real = Simulation3D.run
+    calls = {"n": 0}
+
+    def interrupted(self, *a, **k):
+        calls["n"] += 1
+        if calls["n"] == stop_after:
+            raise KeyboardInterrupt
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(Simulation3D, "run", interrupted)
+    p = _small(checkpoint_dir=str(tmp_path))
+    with pytest.raises(KeyboardInterrupt):
+        _protocol(p)
+    saved = list(tmp_path.glob("seed1-*/*"))
+    assert {f.name for f in saved if f.suffix == ".npz"} == \
+        ({"settle1.npz"} if stop_after == 2 else {"settle1.npz", "settle2.npz"} if stop_after == 6 else
+         {"settle1.npz", "settle2.npz", "loading.npz"}), saved
+    monkeypatch.setattr(Simulation3D, "run", real)
+    resumed = _protocol(p)
+    assert resumed["settle_steps"] == whole["settle_steps"]
+    cols = [c for c in whole["curve"].columns]
+    np.testing.assert_array_equal(resumed["curve"][cols].to_numpy(), whole["curve"][cols].to_numpy())
+    np.testing.assert_array_equal(resumed["bed"]["pos"], whole["bed"]["pos"])
+    assert len(resumed["snapshots"]) == len(whole["snapshots"])
+    calls["n"] = 0
+    monkeypatch.setattr(Simulation3D, "run", interrupted)  # a completed run is not run again: the same result
+    again = _protocol(p)
+    assert calls["n"] == 0
+    np.testing.assert_array_equal(again["curve"][cols].to_numpy(), whole["curve"][cols].to_numpy())
+
+
+def test_checkpoints_of_other_parameters_are_not_resumed(tmp_path):
+    from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints
+
+    a = ProtocolCheckpoints(tmp_path, _small())
+    assert a.dir == ProtocolCheckpoints(tmp_path, _small(progress=True, band_seeds=3)).dir  # not physics
+    for change in ({"seed": 2}, {"plate_speed": 0.1}, {"local_damping": 0.0}, {"box": 2.0}):
+        assert ProtocolCheckpoints(tmp_path, _small(**change)).dir != a.dir, change
+
+
+def test_the_beds_average_stress_meets_the_statics_of_a_bed_between_floor_and_plate():
+    """σ_zz (ch3 eq 3.17 over the bed) against σ_plate + (W/A) Z̄/H, which holds exactly for a bed at rest
+    (demflow.analysis.micro3d): the loading at 0.2 m/s is near enough rest for 1 %; coordination and fabric
+    are those of the listed contacts (fabric trace 1)."""
+    r = _protocol(_small())
+    c = r["curve"]
+    late = c[c.plate_stress > 200e3]
+    assert len(late) >= 2
+    np.testing.assert_allclose(late.stress_zz, late.stress_zz_statics, rtol=1e-2)
+    np.testing.assert_allclose(late.fabric_xx + late.fabric_yy + late.fabric_zz, 1.0, rtol=1e-12)
+    assert (late.fabric_zz > 1 / 3).all()  # loaded along z: contact normals lean towards z
+    assert (c.coordination_walls >= c.coordination).all()
+
+
+def _seed_like_run(final_kink=1.0, floor=257.0, floor_drift=0.0, contacts=None, snapshots=()):
+    """A synthetic run with the seed's Fig. 32/33 statements built in: 100 kPa at 0.1 m, 400 kPa at 0.2 m,
+    linear to 600 kPa at 0.3 m (the second half ``final_kink`` × stiffer), plate contacts rising ever more
+    slowly, ``floor`` floor contacts drifting by ``floor_drift`` over the run, on 100 m²."""
+    import pandas as pd
+
+    s = np.linspace(0.0, 0.3, 301)
+    k3a = 100e3 / 0.05
+    sig = np.where(s <= 0.1, 1e6 * s, np.where(s <= 0.2, 100e3 + 3e6 * (s - 0.1),
+                   np.where(s <= 0.25, 400e3 + k3a * (s - 0.2), 500e3 + final_kink * k3a * (s - 0.25))))
+    plate = 60 * (1 - np.exp(-sig / 150e3)) if contacts is None else contacts(sig)
+    fl = floor * (1 + floor_drift * s / 0.3)
+    c = pd.DataFrame({"settlement": s + 1e-9, "plate_stress": sig, "plate_contacts": plate, "floor_contacts": fl})
+    return {"curve": c, "area": 100.0, "snapshots": list(snapshots)}
+
+
+def _by_name(checks, start):
+    return next(c for c in checks if c.name.startswith(start))
+
+
+def test_the_seeds_curve_statements_pass_on_a_curve_that_has_them():
+    from demflow.cases.miyata_uniaxial3d import seed_statement_checks
+
+    checks = seed_statement_checks(_seed_like_run())
+    assert len(checks) == 5 and all(c.passed for c in checks), [(c.name, c.passed) for c in checks]
+
+
+@pytest.mark.parametrize("change,which", [
+    (dict(final_kink=1.5), "Fig. 32: almost linear"),  # negative control of miyata3d.final-linear (±25 %)
+    (dict(floor=257 * 1.2), "Fig. 33: floor contacts during"),  # of miyata3d.floor-contacts-257 (15 %)
+    (dict(floor_drift=0.15), "Fig. 33: floor contacts almost constant"),  # of miyata3d.floor-constant (10 %)
+    (dict(contacts=lambda sig: 60 * sig / 600e3), "Fig. 33: plate contacts rise"),  # a constant rate
+])
+def test_each_seed_statement_fails_on_a_curve_without_it(change, which):
+    from demflow.cases.miyata_uniaxial3d import seed_statement_checks
+
+    checks = seed_statement_checks(_seed_like_run(**change))
+    assert not _by_name(checks, which).passed
+    assert sum(not c.passed for c in checks) == 1
+
+
+def _mueth_sample(rng, n, b=0.75):
+    """Draws of Miyata eq 61 with the seed's b and <f> = 1 (β = 1.46; the printed β = 1.5 gives <f> = 0.977)."""
+    from demflow.analysis.forces import mueth_pdf
+    from demflow.cases.miyata_uniaxial3d import mueth_beta_for_mean_one
+
+    beta = mueth_beta_for_mean_one(b)
+    top = mueth_pdf(np.linspace(0, 3, 301), b, beta).max()
+    out = []
+    while len(out) < n:
+        f = rng.uniform(0, 12, 4 * n)
+        out += list(f[rng.uniform(0, top, f.size) < mueth_pdf(f, b, beta)])
+    return np.asarray(out[:n])
+
+
+@pytest.mark.parametrize("N,b,ok", [(3.0, 0.75, True), (8.0, 0.0, False)])
+def test_the_force_pdf_statements_follow_the_forces(N, b, ok):
+    """Plate forces drawn from the q-model with N = 3 pass Fig. 35's check, with N = 8 fail it; floor forces drawn
+    from Mueth's law with the seed's b pass, with b = 0 (an exponential) fail (80 and 250 particles, 10
+    independent snapshots)."""
+    from demflow.cases.miyata_uniaxial3d import seed_statement_checks
+
+    rng = np.random.default_rng(5)
+    snaps = [{"stress": 4e5, "plate": rng.gamma(N, 1.0 / N, 80), "plate_ids": np.arange(80),
+              "floor": _mueth_sample(rng, 250, b), "floor_ids": np.arange(250)} for _ in range(10)]
+    checks = seed_statement_checks(_seed_like_run(snapshots=snaps), n_resamples=200)
+    assert _by_name(checks, "Fig. 35: plate").passed is ok
+    assert _by_name(checks, "Fig. 35: floor").passed is ok
+    # Fig. 37: N = 8 is so narrow that forces above 2<F> carry almost nothing (fails); an exponential floor passes
+    assert _by_name(checks, "Fig. 37, plate").passed is ok
+    assert _by_name(checks, "Fig. 37, floor").passed
+
+
+def test_a_particles_contact_point_is_its_members_force_weighted_centre_across_the_periodic_seam():
+    """Two members of body 0 touch the plate on either side of x = 0 (x = 1.9 and 0.1 in a 2 m box, forces 1 and
+    3): the point is 1.9 + (0.2 × 3/4) = 2.05 → 0.05; body 1's single member is itself; ascending body order."""
+    from types import SimpleNamespace
+
+    from demflow.cases.miyata_uniaxial3d import per_particle_forces, wall_contact_points
+
+    n = 4
+    sp = SimpleNamespace(pos=np.array([[1.9, 1.0, 0.1], [0.1, 1.2, 0.1], [0.7, 0.3, 0.1], [1.0, 1.0, 1.0]]),
+                         body=np.array([1, 1, 0, 0]))
+    pairs = SimpleNamespace(i=np.array([0, 1, 2, 3]), j=np.array([n + 1, n + 1, n + 1, n + 0]),
+                            fn=np.array([1.0, 3.0, 2.0, 5.0]))
+    sim = SimpleNamespace(n=n, spheres=sp, pairs=pairs, bodies=SimpleNamespace(mass=np.ones(2)))
+    pts = wall_contact_points(sim, 1, 2.0)
+    np.testing.assert_allclose(pts, [[0.7, 0.3], [0.05, 1.15]], atol=1e-12)
+    np.testing.assert_allclose(per_particle_forces(sim, 1), [2.0, 4.0])

@@ -84,6 +84,8 @@ def test_the_curve_is_consistent(ran):
     c = run.curve
     n = run.meta["n_particles"]
     assert tuple(c.columns) == CURVE_COLUMNS and tuple(run.snapshots.columns) == SNAPSHOT_COLUMNS
+    xy = run.snapshots[["x", "y"]].to_numpy(float)  # contact points (Fig. 34 maps): inside the periodic box
+    assert np.isfinite(xy).all() and (xy >= 0).all() and (xy < p["box"]).all()
     assert np.all(np.diff(c.step) == p["record_every"]) and c.step.iloc[0] == p["record_every"]
     dz = p["plate_speed"] * run.meta["dt"] * p["record_every"]
     np.testing.assert_allclose(-np.diff(c.plate_z), dz, rtol=1e-9)

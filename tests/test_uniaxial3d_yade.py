@@ -63,7 +63,7 @@ def _fake_output(d, curve="step,plate_z,settlement,plate_stress,floor_stress,pla
         n_inserted=4, n_particles=3, weight=1.0, floor_settled=1.0, settle_steps=[5000, 5000], dt=1e-5,
         plate_start=0.4, clump_mass=191.0, clump_inertia=[1.0, 2.0, 3.0])))
     (d / "curve.csv").write_text(curve)
-    (d / "snapshots.csv").write_text("snapshot,stress,wall,force\n")
+    (d / "snapshots.csv").write_text("snapshot,stress,wall,force,x,y\n")
 
 
 def test_the_reader_refuses_missing_truncated_and_non_finite_output(tmp_path):
@@ -125,6 +125,8 @@ def test_yade_curve_and_snapshots_are_consistent(small_run):
         assert f.sum() / 4.0 == pytest.approx(stress, rel=1e-9)
     st = run_statistics(run)
     assert st["particles after trimming"] == 8 and 0 < st["particles on the plate (mean of snapshots)"] <= 8
+    xy = run.snapshots[["x", "y"]].to_numpy(float)  # contact points (Fig. 34 maps): inside the periodic box
+    assert np.isfinite(xy).all() and (xy >= 0).all() and (xy < p["box"]).all()
 
 
 def _synthetic(seed: int, height_shift: float = 0.0, first_touch: float = 0.0):
@@ -143,9 +145,9 @@ def _synthetic(seed: int, height_shift: float = 0.0, first_touch: float = 0.0):
     curve = pd.DataFrame({"step": np.arange(1, 302) * 200, "plate_z": z,
                           "settlement": np.where(z <= touched, touched - z, 0.0), "plate_stress": stress,
                           "floor_stress": stress + 3.7e4, "plate_contacts": 4, "floor_contacts": 12})
-    rows = [(k, 4e5 + k, wall, f) for k in range(2) for wall, n in (("plate", 4), ("floor", 12))
+    rows = [(k, 4e5 + k, wall, f, 0.5, 0.5) for k in range(2) for wall, n in (("plate", 4), ("floor", 12))
             for f in rng.gamma(3.0, 1.0 / 3.0, n)]
-    snaps = pd.DataFrame(rows, columns=["snapshot", "stress", "wall", "force"])
+    snaps = pd.DataFrame(rows, columns=["snapshot", "stress", "wall", "force", "x", "y"])
     return UniaxialRun(curve, snaps, dict(n_particles=78, plate_start=2.215 + height_shift, weight=1.0,
                                           floor_settled=1.0))
 

@@ -23,7 +23,7 @@ from .conformance_3d import Conformance3D
 from .tradeoff_studies import ImpactTradeoff
 from .tradeoff_cases import FallingDiscTradeoff, MiyataUniaxialTradeoff, PhotoelasticTradeoff
 from .ch3_chain import ImpulseChain
-from .miyata_uniaxial3d import MiyataUniaxial3D, MiyataUniaxial3DEllipsoids
+from .miyata_uniaxial3d import MiyataUniaxial3D, MiyataUniaxial3DEllipsoids, MiyataUniaxial3DFull
 from .miyata_uniaxial2d import MiyataUniaxial2D
 from .stability_matrix import StabilityMatrix
 
@@ -39,6 +39,7 @@ CASES[DampedStack.name] = DampedStack()
 CASES[ImpulseChain.name] = ImpulseChain()
 CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
 CASES[MiyataUniaxial3DEllipsoids.name] = MiyataUniaxial3DEllipsoids()
+CASES[MiyataUniaxial3DFull.name] = MiyataUniaxial3DFull()
 CASES[MiyataUniaxial2D.name] = MiyataUniaxial2D()
 CASES[Conformance3D.name] = Conformance3D()
 CASES[ImpactTradeoff.name] = ImpactTradeoff()

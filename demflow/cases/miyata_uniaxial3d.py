@@ -19,6 +19,7 @@ members counts once) and a particle's force is the sum over its members.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -92,17 +93,94 @@ def insertion_scene(p) -> Scene3D:
                    dt_fraction=p["dt_fraction"], outputs=Outputs3D(every=1000), allow_unsafe_dt=True)
 
 
-def settle(sim, p, max_steps: int) -> int:
-    """Run until the kinetic energy is below 1e-9 × weight × 1 m (checked every 5000 steps)."""
+SETTLE_CHUNK = 5000  # steps between the settling tests
+CHECKPOINT_STEPS = 50000  # a resumable state at least this often (about a minute of the full variant)
+PROTOCOL_VERSION = 1  # raise when protocol_run's stages or records change: old checkpoints are then not resumed
+# the parameters that make a protocol run what it is: its checkpoints are kept under a hash of them
+PROTOCOL_KEYS = ("shape", "box", "n_insert", "K", "seed", "trim", "plate_speed", "stress_max", "dt_fraction",
+                 "local_damping", "young", "record_every", "settle_max", "snapshots", "plate_z_min")
+
+
+class ProtocolCheckpoints:
+    """Where one protocol run (one seed's parameters) keeps its resumable state: ``root``/seed<N>-<hash of
+    :data:`PROTOCOL_KEYS` and :data:`PROTOCOL_VERSION`>/ (a run with other parameters never resumes from it).
+    Every file is written atomically.  A completed run keeps its final state: run again, it returns the same
+    result in seconds (the report re-rendered); delete the directory to run it afresh."""
+
+    def __init__(self, root, p):
+        import hashlib
+        import json
+        from pathlib import Path
+
+        key = hashlib.sha256(json.dumps({k: p.get(k) for k in PROTOCOL_KEYS} | {"version": PROTOCOL_VERSION}, sort_keys=True,
+                                        default=str).encode()).hexdigest()[:12]
+        self.dir = Path(root) / f"seed{int(p['seed'])}-{key}"
+        self._t0 = time.perf_counter()
+        self._base_s = float(self.load("compute_s") or 0.0)  # compute time of earlier sessions of this run
+
+    def compute_s(self) -> float:
+        """Seconds this run has computed, over every session up to its last checkpoint and this one's now."""
+        return self._base_s + time.perf_counter() - self._t0
+
+    def mark_time(self) -> None:
+        self.save("compute_s", self.compute_s())
+
+    def path(self, name: str):
+        return self.dir / name
+
+    def save(self, name: str, obj) -> None:
+        import pickle
+
+        from ..results import _atomic_write
+
+        from pathlib import Path
+
+        _atomic_write(self.dir / name, lambda t: Path(t).write_bytes(pickle.dumps(obj)))
+
+    def load(self, name: str):
+        import pickle
+
+        f = self.dir / name
+        return pickle.loads(f.read_bytes()) if f.exists() else None
+
+
+def settle(sim, p, max_steps: int, ck: ProtocolCheckpoints | None = None, stage: str = "settle", bar=None) -> int:
+    """Run until the kinetic energy is below 1e-9 × weight × 1 m (checked every :data:`SETTLE_CHUNK` steps);
+    the steps run, negative when ``max_steps`` ran out first.  With ``ck``, resumable: the state is saved
+    every :data:`CHECKPOINT_STEPS` steps and at the end (``<stage>.npz``, ``<stage>.done``), and a saved
+    state is continued (to the bit: the same chunks from the same state)."""
     W = float(sim.bodies.mass.sum()) * G
-    done = 0
+    if ck is not None:
+        finished = ck.load(f"{stage}.done")
+        if ck.path(f"{stage}.npz").exists():
+            sim.load_checkpoint(ck.path(f"{stage}.npz"))
+        if finished is not None:
+            if bar is not None:
+                bar.update(abs(finished))
+            return finished
+    done = sim.step
+    if bar is not None:
+        bar.update(done)
+    result = None
     while done < max_steps:
-        sim.run(5000)
-        done += 5000
+        sim.run(SETTLE_CHUNK, progress=False if bar is not None else None)
+        done += SETTLE_CHUNK
+        if bar is not None:
+            bar.update(SETTLE_CHUNK)
         r = sim.tables(include_records=True)["records"].iloc[-1]
         if r.kinetic_translation + r.kinetic_rotation < 1e-9 * W * 1.0:
-            return done
-    return -done
+            result = done
+            break
+        if ck is not None and done % CHECKPOINT_STEPS == 0:
+            sim.save_checkpoint(ck.path(f"{stage}.npz"))
+            ck.mark_time()
+    if result is None:
+        result = -done
+    if ck is not None:
+        sim.save_checkpoint(ck.path(f"{stage}.npz"))
+        ck.save(f"{stage}.done", result)
+        ck.mark_time()
+    return result
 
 
 def next_stage(sim, p, name: str, keep=None, plate_z: float | None = None) -> Scene3D:
@@ -139,6 +217,25 @@ def per_particle_forces(sim, wall: int) -> np.ndarray:
     body = sim.spheres.body[pr.i[on]]
     f = np.bincount(body, weights=pr.fn[on], minlength=len(sim.bodies.mass))
     return f[f > 0]
+
+
+def wall_contact_points(sim, wall: int, box: float) -> np.ndarray:
+    """Where each particle touching wall ``wall`` touches it, seen from above: the normal-force-weighted mean
+    (x, y) of its member spheres' centres on that wall (periodic: relative to its first touching member by the
+    minimum image), wrapped into [0, box); rows in the order of :func:`per_particle_forces` (ascending body).
+    The point every engine's force map draws (Miyata Fig. 34: the force at each contact point)."""
+    pr = sim.pairs
+    on = (pr.j == sim.n + wall) & (pr.fn > 0)
+    i, w = pr.i[on], pr.fn[on]
+    body = sim.spheres.body[i]
+    _, first, inv = np.unique(body, return_index=True, return_inverse=True)
+    xy = sim.spheres.pos[i, :2]
+    ref = xy[first]
+    d = xy - ref[inv]
+    d -= box * np.round(d / box)
+    wsum = np.bincount(inv, weights=w)
+    mean = np.column_stack([np.bincount(inv, weights=w * d[:, k]) for k in range(2)]) / wsum[:, None]
+    return np.mod(ref + mean, box)
 
 
 STRESS_LEVELS_KPA = (100, 200, 300, 400, 500, 600)  # the curve sampled at fixed stresses (every run reaches them)
@@ -182,6 +279,68 @@ def pooled_f(u, wall: str = "plate") -> np.ndarray:
     """f = F/<F> per particle on ``wall``, each snapshot normalised by its own mean, pooled."""
     fs = [f for f in u.snapshot_forces(wall) if f.size]
     return np.concatenate([f / f.mean() for f in fs]) if fs else np.zeros(0)
+
+
+def pooled_f_snaps(snaps, wall: str) -> np.ndarray:
+    """f = F/<F> per particle on ``wall`` over demflow's snapshots (each normalised by its own mean), pooled."""
+    fs = [s[wall] for s in snaps if len(s[wall])]
+    return np.concatenate([f / f.mean() for f in fs]) if fs else np.zeros(0)
+
+
+def cluster_bootstrap(snaps, wall: str, statistic, n_resamples: int, level: float) -> tuple[float, float]:
+    """Percentile interval at ``level`` of ``statistic`` (a function of pooled f) resampling the particles
+    that touched ``wall`` with all their snapshots (scipy.stats.bootstrap over particle ids; each resample
+    normalised to mean 1 again): the snapshots of one particle are not independent draws, so the particle is
+    the unit resampled."""
+    from scipy import stats
+
+    ids = np.concatenate([s[f"{wall}_ids"] for s in snaps if len(s[wall])])
+    f = pooled_f_snaps(snaps, wall)
+    uniq, inv = np.unique(ids, return_inverse=True)
+    order = np.argsort(inv, kind="stable")
+    groups = np.split(f[order], np.cumsum(np.bincount(inv))[:-1])
+    def resampled(k):
+        fb = np.concatenate([groups[i] for i in k])
+        return statistic(fb / fb.mean())  # f = F/<F> of the resampled bed
+
+    res = stats.bootstrap((np.arange(uniq.size),), resampled,
+                          vectorized=False, n_resamples=n_resamples, confidence_level=level, method="percentile",
+                          random_state=np.random.default_rng(0))
+    return float(res.confidence_interval.low), float(res.confidence_interval.high)
+
+
+def first_reach(curve, stress: float) -> float:
+    """Settlement [m] where the plate stress first reaches ``stress`` [Pa] (nan if it never does)."""
+    hit = curve[curve.plate_stress >= stress]
+    return float(hit.settlement.iloc[0]) if len(hit) else math.nan
+
+
+REGIMES = (100e3, 400e3)  # Miyata §3.3, Fig. 32: initial 0-100, transitional 100-400, final > 400 kPa
+
+
+def regime_numbers(curve) -> dict:
+    """The stress-settlement curve's regimes (Fig. 32) and the plate contacts' rates (Fig. 33): secant stiffness
+    [Pa/m] of the initial (first touch to 100 kPa) and transitional (100-400 kPa) regimes, of the first and
+    second halves (by settlement) of the final regime (400 kPa to the end), the plate contacts' rate per kPa in
+    each regime, and the floor contacts' spread (max - min)/mean from the first touch on."""
+    on = curve[curve.settlement > 0]
+    s1, s2 = first_reach(curve, REGIMES[0]), first_reach(curve, REGIMES[1])
+    end_s, end_sig = float(curve.settlement.iloc[-1]), float(curve.plate_stress.iloc[-1])
+    mid = 0.5 * (s2 + end_s)
+    sig_mid = float(np.interp(mid, on.settlement.to_numpy(), on.plate_stress.to_numpy()))
+
+    def contacts_at(stress):
+        hit = curve[curve.plate_stress >= stress]
+        return float(hit.plate_contacts.iloc[0]) if len(hit) else math.nan
+
+    c0, c1, c2, c3 = contacts_at(1e-12), contacts_at(REGIMES[0]), contacts_at(REGIMES[1]), float(curve.plate_contacts.iloc[-1])
+    fl = on.floor_contacts.to_numpy(float)
+    return {"k initial": REGIMES[0] / s1, "k transitional": (REGIMES[1] - REGIMES[0]) / (s2 - s1),
+            "k final, first half": (sig_mid - REGIMES[1]) / (mid - s2), "k final, second half": (end_sig - sig_mid) / (end_s - mid),
+            "plate contacts per kPa, initial": (c1 - c0) / (REGIMES[0] / 1e3),
+            "plate contacts per kPa, transitional": (c2 - c1) / ((REGIMES[1] - REGIMES[0]) / 1e3),
+            "plate contacts per kPa, final": (c3 - c2) / ((end_sig - REGIMES[1]) / 1e3),
+            "floor contacts spread": float((fl.max() - fl.min()) / fl.mean()), "floor contacts mean": float(fl.mean())}
 
 
 def band_of(values) -> tuple[float, float]:
@@ -256,53 +415,109 @@ def engine_for(name: str, p: dict):
     raise EngineError(f"no uniaxial deck for engine {name!r}; choose yade or liggghts")
 
 
+def _loading_row(s3, A, touched, weight):
+    """One record of the loading stage: the plate and floor stresses and contacts, and the bed's
+    coordination, fabric and average stress (:func:`demflow.analysis.micro3d.micro_state`)."""
+    from ..analysis.micro3d import micro_state, statics_stress_zz
+
+    plate = float(s3.planes.force[1, 2]) / A
+    zp = float(s3.planes.point[1, 2])
+    fp = per_particle_forces(s3, 1)
+    ff = per_particle_forces(s3, 0)
+    m = micro_state(s3, A * zp)
+    f, sg = m["fabric"], m["stress"]
+    row = {"step": s3.step, "plate_z": zp, "settlement": (touched - zp) if touched is not None else 0.0,
+           "plate_stress": plate, "floor_stress": -float(s3.planes.force[0, 2]) / A, "plate_contacts": fp.size,
+           "floor_contacts": ff.size, "coordination": m["coordination"], "coordination_walls": m["coordination_walls"],
+           "fabric_xx": f[0, 0], "fabric_yy": f[1, 1], "fabric_zz": f[2, 2],
+           "stress_xx": sg[0, 0], "stress_yy": sg[1, 1], "stress_zz": sg[2, 2],
+           "stress_xz": 0.5 * (sg[0, 2] + sg[2, 0]), "stress_yz": 0.5 * (sg[1, 2] + sg[2, 1]), "com_z": m["com_z"],
+           "stress_zz_statics": statics_stress_zz(plate, weight, A, m["com_z"], zp)}
+    return row, fp, ff, m
+
+
 def protocol_run(p) -> dict:
     """demflow's run of the protocol for parameters ``p`` (one seed): the loading curve, the snapshots and
-    the settled bed's numbers (the keys :meth:`demflow.engines.uniaxial3d.UniaxialRun.from_case` reads)."""
+    the settled bed's numbers (the keys :meth:`demflow.engines.uniaxial3d.UniaxialRun.from_case` reads).
+
+    ``p["checkpoint_dir"]`` (optional): resumable (:class:`ProtocolCheckpoints`; an interrupted run given the
+    same parameters continues where its last checkpoint was, to the bit; a completed one returns its result).  ``p["progress"]``: progress bars
+    per stage (True / False / None: on a terminal)."""
+    import pandas as pd
+
+    from .. import progress
     from ..build import build
 
+    t_start = time.perf_counter()
+    root = p.get("checkpoint_dir") or ""
+    ck = ProtocolCheckpoints(root, p) if root else None
+    show = p.get("progress")
+    seed = int(p["seed"])
     A = p["box"] ** 2
     s1 = build(insertion_scene(p))
-    steps1 = settle(s1, p, p["settle_max"])
+    with progress.bar(p["settle_max"], f"seed {seed}: settle the inserted bed", show=show) as bar:
+        steps1 = settle(s1, p, p["settle_max"], ck, "settle1", bar)
     keep = np.nonzero(s1.bodies.pos[:, 2] <= p["trim"])[0]
     s2 = build(next_stage(s1, p, "miyata-uniaxial-3d-trimmed", keep))
-    steps2 = settle(s2, p, p["settle_max"])
+    with progress.bar(p["settle_max"], f"seed {seed}: settle the trimmed bed", show=show) as bar:
+        steps2 = settle(s2, p, p["settle_max"], ck, "settle2", bar)
     weight = float(s2.bodies.mass.sum()) * G
     floor_settled = -float(s2.planes.force[0, 2])
     n_particles = len(s2.bodies.mass)
     top = float(particle_tops(s2).max())
     s3 = build(next_stage(s2, p, "miyata-uniaxial-3d-loading", plate_z=top + 0.005))
     z0 = top + 0.005
-    rows = []
-    snaps = []
-    levels = list(np.linspace(400e3, p["stress_max"], p["snapshots"]))
-    touched = None
-    while True:
-        s3.run(p["record_every"])
-        plate = float(s3.planes.force[1, 2]) / A
-        floor = -float(s3.planes.force[0, 2]) / A
-        zp = float(s3.planes.point[1, 2])
-        if touched is None and plate > 0:
-            touched = zp
-        fp = per_particle_forces(s3, 1)
-        ff = per_particle_forces(s3, 0)
-        rows.append({"step": s3.step, "plate_z": zp, "settlement": (touched - zp) if touched is not None else 0.0,
-                     "plate_stress": plate, "floor_stress": floor, "plate_contacts": fp.size,
-                     "floor_contacts": ff.size})
-        while levels and plate >= levels[0]:
-            snaps.append({"stress": plate, "plate": fp, "floor": ff,
-                          "plate_xy": s3.bodies.pos[plate_touching(s3, 1), :2].copy()})
-            levels.pop(0)
-        if plate >= p["stress_max"] or zp < p["plate_z_min"]:
-            break
-    import pandas as pd
-
+    st = {"rows": [], "snaps": [], "levels": list(np.linspace(400e3, p["stress_max"], p["snapshots"])),
+          "touched": None, "finished": False}
+    if ck is not None and ck.path("loading.npz").exists():
+        s3.load_checkpoint(ck.path("loading.npz"))
+        st = ck.load(f"loading-{s3.step}.pkl")
+        if st is None:
+            raise FileNotFoundError(f"{ck.dir}: loading.npz is at step {s3.step} but loading-{s3.step}.pkl is missing; "
+                                    f"remove {ck.dir} to start this run afresh")
+    last_ckpt = s3.step
+    every_ckpt = max(1, CHECKPOINT_STEPS // int(p["record_every"])) * int(p["record_every"])
+    with progress.bar(int(round(p["stress_max"] / 1e3)), f"seed {seed}: load the plate", unit="kPa", show=show) as bar:
+        shown = 0
+        while not st["finished"]:
+            s3.run(p["record_every"], progress=False if show is not None else None)
+            plate = float(s3.planes.force[1, 2]) / A
+            zp = float(s3.planes.point[1, 2])
+            if st["touched"] is None and plate > 0:
+                st["touched"] = zp
+            row, fp, ff, m = _loading_row(s3, A, st["touched"], weight)
+            st["rows"].append(row)
+            while st["levels"] and plate >= st["levels"][0]:
+                st["snaps"].append({"stress": plate, "plate": fp, "floor": ff,
+                                    "plate_ids": plate_touching(s3, 1), "floor_ids": plate_touching(s3, 0),
+                                    "plate_xy": s3.bodies.pos[plate_touching(s3, 1), :2].copy(),
+                                    "floor_xy": s3.bodies.pos[plate_touching(s3, 0), :2].copy(),
+                                    "plate_cxy": wall_contact_points(s3, 1, p["box"]),
+                                    "floor_cxy": wall_contact_points(s3, 0, p["box"]),
+                                    "fabric": m["fabric"], "stress_tensor": m["stress"],
+                                    "coordination": m["coordination"]})
+                st["levels"].pop(0)
+            st["finished"] = bool(plate >= p["stress_max"] or zp < p["plate_z_min"])
+            now = max(0, min(int(plate / 1e3), int(round(p["stress_max"] / 1e3))))
+            if now > shown:
+                bar.update(now - shown)
+                shown = now
+            if ck is not None and (s3.step - last_ckpt >= every_ckpt or st["finished"]):
+                ck.save(f"loading-{s3.step}.pkl", st)
+                s3.save_checkpoint(ck.path("loading.npz"))
+                for old in ck.dir.glob("loading-*.pkl"):
+                    if old.name != f"loading-{s3.step}.pkl":
+                        old.unlink()
+                last_ckpt = s3.step
+                ck.mark_time()
     sp = s3.spheres
     bed = {"pos": sp.pos.copy(), "r": sp.r.copy(), "body": sp.body.copy(), "plate_z": float(s3.planes.point[1, 2]),
            "box": float(p["box"])}
-    return {"curve": pd.DataFrame(rows), "snapshots": snaps, "weight": weight, "floor_settled": floor_settled,
-            "n_particles": n_particles, "area": A, "settle_steps": (steps1, steps2), "dt": s3.dt, "plate_start": z0,
-            "seed": int(p["seed"]), "bed": bed}
+    out = {"curve": pd.DataFrame(st["rows"]), "snapshots": st["snaps"], "weight": weight,
+           "floor_settled": floor_settled, "n_particles": n_particles, "area": A, "settle_steps": (steps1, steps2),
+           "dt": s3.dt, "plate_start": z0, "seed": seed, "bed": bed,
+           "compute_s": ck.compute_s() if ck is not None else time.perf_counter() - t_start}
+    return out
 
 
 
@@ -339,7 +554,7 @@ class MiyataUniaxial3D(Case):
     slow = True
     params = dict(shape="clumps", box=2.0, n_insert=80, K=8, seed=1, trim=2.0, plate_speed=0.02, stress_max=600e3, dt_fraction=0.2,
                   local_damping=0.3, young=7e10, record_every=200, settle_max=400000, snapshots=10, plate_z_min=0.5, band_seeds=8,
-                  engine_refs=1, engine_seeds=2, undamped_band=1, workers=None)
+                  engine_refs=1, engine_seeds=2, undamped_band=1, workers=None, checkpoint_dir="", progress=None)
 
     def run(self, p) -> CaseRun:
         from ..scene import SceneError
@@ -370,7 +585,12 @@ class MiyataUniaxial3D(Case):
         extras["band_undamped"] = ({s: UniaxialRun.from_case(r) for s, r in zip(seeds, runs[len(seeds):])}
                                    if undamped else {})
         extras["engines"] = self._engines(p) if (p["engine_refs"] and p["shape"] == "clumps") else {}
-        return CaseRun({}, extras)
+        # `demflow run` saves the first seed's run as the engines' runs are stored (curve.parquet with the bed's
+        # micro-state columns, snapshots.parquet, uniaxial.json)
+        mine = UniaxialRun.from_case(runs[0])
+        mine.curve = runs[0]["curve"].copy()
+        mine.meta.update(seed=seeds[0], compute_s=float(runs[0]["compute_s"]))
+        return CaseRun({f"seed{seeds[0]}": mine}, extras)
 
     engines = ("yade", "liggghts")
     live = False
@@ -446,21 +666,27 @@ class MiyataUniaxial3D(Case):
         out.append(Check.info("self-weight floor stress per metre of bed vs the seed's 27.5 kPa bed [Pa]",
                               ex["floor_settled"] / A, SRC, "Reduced box: the same depth, so about the same stress "
                               "(the seed: 1469 × 191 kg × g / 100 m²).", reference=SEED_FLOOR_STRESS))
-        if ex["snapshots"]:
-            from ..analysis.forces import fit_q_model
-
-            fp = np.concatenate([s["plate"] / s["plate"].mean() for s in ex["snapshots"]])
-            ff = np.concatenate([s["floor"] / s["floor"].mean() for s in ex["snapshots"]])
-            out.append(Check.info("q-model N of the plate forces (per particle, 10 snapshots at 400-600 kPa)",
-                                  fit_q_model(fp).N, SRC, "The seed: plate PDF close to the q-model with N = 3.",
-                                  reference=3.0))
-            out.append(Check.info("q-model N of the floor forces (per particle)", fit_q_model(ff).N, SRC,
-                                  "The seed fits the floor with Mueth et al. (a = 3, b = 0.75, β = 1.5) instead."))
-            out.append(Check.info("particles on the floor at 400-600 kPa (mean over snapshots) per m²",
-                                  float(np.mean([s["floor"].size for s in ex["snapshots"]])) / A, SRC,
-                                  "The seed: about 257 bottom contacts on 100 m².", reference=2.57))
+        out += self._seed_statements(ex)
         out += self._cross_code_checks(run, p)
         return out
+
+    @staticmethod
+    def _seed_statements(ex) -> list:
+        """The seed's force statistics beside this run's: informative in the reduced box (2-6 particles on the
+        plate); the full variant judges them (:meth:`MiyataUniaxial3DFull._seed_statements`)."""
+        if not ex["snapshots"]:
+            return []
+        from ..analysis.forces import fit_q_model
+
+        A = ex["area"]
+        fp, ff = pooled_f_snaps(ex["snapshots"], "plate"), pooled_f_snaps(ex["snapshots"], "floor")
+        return [Check.info("q-model N of the plate forces (per particle, 10 snapshots at 400-600 kPa)",
+                           fit_q_model(fp).N, SRC, "The seed: plate PDF close to the q-model with N = 3.", reference=3.0),
+                Check.info("q-model N of the floor forces (per particle)", fit_q_model(ff).N, SRC,
+                           "The seed fits the floor with Mueth et al. (a = 3, b = 0.75, β = 1.5) instead."),
+                Check.info("particles on the floor at 400-600 kPa (mean over snapshots) per m²",
+                           float(np.mean([s["floor"].size for s in ex["snapshots"]])) / A, SRC,
+                           "The seed: about 257 bottom contacts on 100 m².", reference=2.57)]
 
     def _cross_code_checks(self, run, p) -> list:
         """Each engine's statistics against demflow's seed band with the engine's physics (issue 14 item 4;
@@ -556,10 +782,26 @@ class MiyataUniaxial3D(Case):
         ex = run.extras
         c = ex["curve"]
         rows = [{"particles": ex["n_particles"], "settle steps (insert, trimmed)": str(ex["settle_steps"]),
+                 "compute time of the protocol [s]": round(float(ex.get("compute_s", math.nan)), 1),
                  "Δt [s]": ex["dt"], "loading steps": int(c.step.iloc[-1]),
                  "final plate stress [kPa]": c.plate_stress.iloc[-1] / 1e3,
                  "final settlement [mm]": c.settlement.iloc[-1] * 1e3}]
         out = [("Run", pd.DataFrame(rows))]
+        if ex["snapshots"] and "fabric" in ex["snapshots"][0]:
+            from ..analysis.micro3d import statics_stress_zz
+
+            micro = []
+            for sn in ex["snapshots"]:
+                row = c.iloc[int(np.argmin(np.abs(c.plate_stress.to_numpy() - sn["stress"])))]
+                sg, fb = sn["stress_tensor"], sn["fabric"]
+                micro.append({"plate stress [kPa]": sn["stress"] / 1e3, "coordination z": sn["coordination"],
+                              "φ_xx": fb[0, 0], "φ_yy": fb[1, 1], "φ_zz": fb[2, 2],
+                              "σ_xx [kPa]": sg[0, 0] / 1e3, "σ_yy [kPa]": sg[1, 1] / 1e3, "σ_zz [kPa]": sg[2, 2] / 1e3,
+                              "σ_zz of statics [kPa]": statics_stress_zz(sn["stress"], ex["weight"], ex["area"],
+                                                                          float(row.com_z), float(row.plate_z)) / 1e3,
+                              "K0 = σ_h/σ_zz": 0.5 * (sg[0, 0] + sg[1, 1]) / sg[2, 2]})
+            out.append(("Bed micro-state at the snapshots (ch3 eq 3.17 over the bed between floor and plate; "
+                        "demflow.analysis.micro3d)", pd.DataFrame(micro)))
         band = ex.get("band", {})
         if len(band) >= 3:
             per_seed = {s: run_statistics(u) for s, u in band.items()}
@@ -612,18 +854,9 @@ class MiyataUniaxial3D(Case):
         paths = [f"{outdir}/stress_settlement.png"]
         save_figure(fig, paths[0])
         if ex["snapshots"]:
-            from ..analysis.forces import q_model_pdf
-
-            fp = np.concatenate([s["plate"] / s["plate"].mean() for s in ex["snapshots"]])
-            fig, ax = plt.subplots(figsize=(5, 3.8))
-            ax.hist(fp, bins=15, density=True, color="0.8", label="plate, per particle")
-            f = np.linspace(0.01, fp.max(), 200)
-            ax.plot(f, q_model_pdf(f, 3.0), "r-", label="q-model N = 3 (seed)")
-            ax.set_xlabel("f = F/<F>")
-            ax.set_ylabel("P(f)")
-            ax.legend()
-            paths.append(f"{outdir}/plate_pdf.png")
-            save_figure(fig, paths[1])
+            paths.append(force_statistics_figure(ex, outdir))
+        if "coordination" in c:
+            paths.append(micro_figure(ex, outdir))
         if "bed" in ex:
             paths += bed_figures(ex, outdir)
         if len(ex.get("band", {})) >= 3:
@@ -641,6 +874,119 @@ class MiyataUniaxial3DEllipsoids(MiyataUniaxial3D):
     @staticmethod
     def page_sections():
         return []
+
+
+SEED_FLOOR_CONTACTS = 257.0  # Miyata §3.3, Fig. 33: bottom contacts on the 10 × 10 m floor during compression
+SEED_MUETH = {"b": 0.75, "beta": 1.5}  # Miyata eq 61 as fitted to the seed's floor (a = 3 its normalisation)
+
+
+def mueth_beta_for_mean_one(b: float) -> float:
+    """β of Miyata eq 61 with <f> = 1 for this b (brentq on :func:`demflow.analysis.forces.mueth_mean`)."""
+    from scipy.optimize import brentq
+
+    from ..analysis.forces import mueth_mean
+
+    return float(brentq(lambda beta: mueth_mean(b, beta) - 1.0, 0.05, 20.0))
+
+
+def seed_statement_checks(ex, n_resamples: int = 400) -> list:
+    """The seed's statements of §3.3 judged on one run (its extras): Fig. 32's regimes and linear final
+    regime, Fig. 33's contact rates and constant floor count of about 257 (scaled to the run's area), Fig. 35's
+    q-model N = 3 on the plate and Mueth's (b, β) on the floor, Fig. 37's load support.  Tolerances:
+    miyata3d.* of :mod:`demflow.tolerances`."""
+    from ..analysis.forces import LOAD_CLASSES, fit_mueth, fit_q_model, load_support
+
+    out = []
+    c = ex["curve"]
+    r = regime_numbers(c)
+    t = tol("miyata3d.regimes")
+    ratio = r["k transitional"] / r["k initial"]
+    out.append(Check.condition(f"Fig. 32: the stress rises more rapidly in the transitional regime (100-400 kPa) than in "
+                               f"the initial (0-100 kPa): secant stiffness ratio {ratio:.3g} > {t.value:g}",
+                               bool(ratio > t.value), ratio, SRC, t.why, kind=t.kind))
+    t = tol("miyata3d.final-linear")
+    dev = r["k final, second half"] / r["k final, first half"] - 1.0
+    out.append(Check.condition(f"Fig. 32: almost linear over 400 kPa: second half's secant stiffness {dev:+.1%} from the "
+                               f"first half's (within ±{t.value:.0%})", bool(abs(dev) <= t.value), dev, SRC, t.why,
+                               kind=t.kind))
+    t = tol("miyata3d.contact-rates")
+    rates = [r[f"plate contacts per kPa, {k}"] for k in ("initial", "transitional", "final")]
+    out.append(Check.condition("Fig. 33: plate contacts rise fastest in the initial regime, slower in the transitional, "
+                               f"slowest in the final (per kPa: {', '.join(f'{x:.3g}' for x in rates)})",
+                               bool(rates[0] > rates[1] > rates[2]), rates[0], SRC, t.why, kind=t.kind))
+    t = tol("miyata3d.floor-constant")
+    out.append(Check.condition(f"Fig. 33: floor contacts almost constant during compression: (max - min)/mean = "
+                               f"{r['floor contacts spread']:.3g} within {t.value:.0%}",
+                               bool(r["floor contacts spread"] <= t.value), r["floor contacts spread"], SRC, t.why,
+                               kind=t.kind))
+    expected = SEED_FLOOR_CONTACTS * ex["area"] / 100.0
+    out.append(Check.against(f"Fig. 33: floor contacts during compression (mean, per particle) vs the seed's about 257 "
+                             f"on 100 m² ({expected:.4g} on {ex['area']:g} m²)", r["floor contacts mean"], expected,
+                             "miyata3d.floor-contacts-257", SRC))
+    snaps = ex["snapshots"]
+    level = tol("miyata3d.bootstrap-level")
+    if snaps:
+        fp = pooled_f_snaps(snaps, "plate")
+        N = fit_q_model(fp).N
+        lo, hi = cluster_bootstrap(snaps, "plate", lambda f: fit_q_model(f).N, n_resamples, level.value)
+        out.append(Check.condition(f"Fig. 35: plate forces fit the q-model with the seed's N = 3: fitted N = {N:.3g}, "
+                                   f"{level.value:.0%} interval [{lo:.3g}, {hi:.3g}] (particles resampled)",
+                                   bool(lo <= 3.0 <= hi), N, SRC, level.why, kind=level.kind))
+        ff = pooled_f_snaps(snaps, "floor")
+        # the seed's (b, β) = (0.75, 1.5) has <f> = 0.977, and f = F/<F> has mean 1: the fit ties β to b by
+        # <f> = 1 (fit_mueth impose_mean) and judges b; the seed's b with mean 1 has β = mueth_beta_for_mean_one(b)
+        mu = fit_mueth(ff, impose_mean=True)
+        lo, hi = cluster_bootstrap(snaps, "floor", lambda f: fit_mueth(f, impose_mean=True).b, n_resamples, level.value)
+        out.append(Check.condition(f"Fig. 35: floor forces fit Mueth et al. with the seed's b = {SEED_MUETH['b']:g} (β tied "
+                                   f"to b by <f> = 1: {mueth_beta_for_mean_one(SEED_MUETH['b']):.3g} for the seed's b, "
+                                   f"its printed 1.5 gives <f> = 0.977): fitted b = {mu.b:.3g} (β = {mu.beta:.3g}), "
+                                   f"{level.value:.0%} interval [{lo:.3g}, {hi:.3g}]",
+                                   bool(lo <= SEED_MUETH["b"] <= hi), mu.b, SRC, level.why, kind=level.kind))
+        t = tol("miyata3d.load-support")
+        for wall, f in (("plate", fp), ("floor", ff)):
+            sh = load_support(f).classes
+            small, medium, large = (sh[k] for k in LOAD_CLASSES)
+            out.append(Check.condition(f"Fig. 37, {wall}: small forces (f < 0.5) carry less of the load ({small:.1%}) than "
+                                       f"medium (0.5-2: {medium:.1%}) and large (> 2: {large:.1%})",
+                                       bool(small < medium and small < large), small, SRC, t.why, kind=t.kind))
+    return out
+
+
+class MiyataUniaxial3DFull(MiyataUniaxial3D):
+    """The seed's own run: 1500 particles in the 10 × 10 m box (issue 14 item 2's full variant), one seed,
+    resumable from checkpoints (``checkpoint_dir``; progress bars on a terminal), and the seed's statements
+    (Figs 32-35, 37) judged on it."""
+
+    name = "miyata-uniaxial-3d-full"
+    title = "Uniaxial compression of ellipsoid-like clumps (Miyata §3.3), full variant: 1500 particles, 10 × 10 m"
+    slow = True
+    params = dict(MiyataUniaxial3D.params, box=10.0, n_insert=1500, band_seeds=1, engine_refs=0, undamped_band=0,
+                  checkpoint_dir=".demflow/checkpoints/miyata-uniaxial-3d-full")
+    assumptions = tuple(a for a in MiyataUniaxial3D.assumptions
+                        if not a.startswith(("Reduced variant", "Seed band", "The stress-settlement curve is compared"))) + (
+        "Full variant: the seed's 1500 particles inserted in its 10 × 10 m periodic box, trimmed at 2.0 m, one seed. "
+        "Resumable: the run keeps checkpoints under checkpoint_dir (every 50 000 steps and at each stage's end; "
+        "rerun the same command to continue an interrupted run, delete the directory to start afresh); the "
+        "'compute time' of the Run table sums the sessions of the run.",
+        "The seed's statements (Figs 32, 33, 35, 37) are judged on this one run, each by a reading of its words "
+        "fixed before the run (tolerances miyata3d.*); Fig. 34 (force maps) is drawn, not judged.",
+        "The bed's micro-state (coordination per body pair, contact-normal fabric, average stress of ch3 eq 3.17 "
+        "over the bed) is recorded during loading; σ_zz is shown against the statics of a bed at rest.",
+    )
+
+    @staticmethod
+    def page_sections():
+        return []
+
+    def reference_plan(self):
+        return None
+
+    def comparison_case(self):
+        return None
+
+    @staticmethod
+    def _seed_statements(ex) -> list:
+        return seed_statement_checks(ex)
 
 
 ENGINE_COLOURS = {"yade": "tab:red", "liggghts": "tab:blue"}
@@ -718,14 +1064,122 @@ def engine_figures(ex, outdir) -> list:
             a.legend(fontsize=7)
     fig.suptitle("per-particle force PDFs at 400-600 kPa (dashed: each run's q-model fit)")
     paths.append(save_figure(fig, f"{outdir}/engines_force_pdfs.png"))
+    paths.append(engine_force_maps(ex, outdir))
     return paths
+
+
+def engine_force_maps(ex, outdir) -> str:
+    """Miyata Fig. 34 for every engine side by side: the plate and floor force maps of the first snapshot
+    (400 kPa) of demflow's first seed and of each stored engine run; each particle at the point where it
+    touches the wall (:func:`wall_contact_points`), disc area ∝ its force on one scale per wall."""
+    import matplotlib.pyplot as plt
+
+    from ..plotting import save_figure
+
+    first = next(iter(ex["band"]))
+    runs = {f"demflow seed{first}": ex["band"][first], **ex["engines"]}
+    L = float(np.sqrt(ex["area"]))
+    fig, axs = plt.subplots(2, len(runs), figsize=(3.6 * len(runs), 7.4), squeeze=False)
+    for row, wall in enumerate(("plate", "floor")):
+        top = max((float(u.snapshot_points(wall)[0].max()) for u in runs.values() if len(u.snapshot_points(wall)[0])),
+                  default=1.0)
+        for col, (name, u) in enumerate(runs.items()):
+            a = axs[row, col]
+            f, xy = u.snapshot_points(wall)
+            stress = u.snapshots.stress[u.snapshots.snapshot == 0]
+            colour = ENGINE_COLOURS.get(engine_of(name), "0.3")
+            if len(f) and np.all(np.isfinite(xy)):
+                a.scatter(xy[:, 0], xy[:, 1], s=500 * f / top, c=colour, alpha=0.6, edgecolors="k", linewidths=0.4)
+            else:
+                a.text(0.5, 0.5, "no contact points stored", ha="center", va="center", transform=a.transAxes)
+            a.set_xlim(0, L)
+            a.set_ylim(0, L)
+            a.set_aspect("equal")
+            a.set_title(f"{name}: {wall} at {float(stress.iloc[0]) / 1e3 if len(stress) else math.nan:.0f} kPa "
+                        f"({len(f)} particles)", fontsize=8)
+            a.set_xlabel("x [m]", fontsize=8)
+            a.set_ylabel("y [m]", fontsize=8)
+    fig.suptitle("force maps at the first snapshot (Miyata Fig. 34; disc area ∝ force, one scale per wall)")
+    return save_figure(fig, f"{outdir}/engines_force_maps.png")
+
+
+def force_statistics_figure(ex, outdir) -> str:
+    """Miyata Figs 35 and 37 for one run: the PDFs of f = F/<F> per particle on the plate and the floor
+    (10 snapshots at 400-600 kPa) with the seed's q-model N = 3 and Mueth law and this run's fits, and the load
+    support (share of the load carried by each class of f)."""
+    import matplotlib.pyplot as plt
+
+    from ..analysis.forces import fit_mueth, fit_q_model, load_support, mueth_pdf, q_model_pdf
+    from ..plotting import save_figure
+
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4.2))
+    x = np.linspace(0.01, 5.0, 300)
+    for a, wall in zip(axs[:2], ("plate", "floor")):
+        f = pooled_f_snaps(ex["snapshots"], wall)
+        if f.size < 5:
+            continue
+        a.hist(f, bins=np.linspace(0, max(5.0, f.max()), 26), density=True, color="0.8", label=f"{wall}, per particle ({f.size})")
+        a.plot(x, q_model_pdf(x, 3.0), "r:", label="q-model N = 3 (the seed's plate)")
+        a.plot(x, mueth_pdf(x, SEED_MUETH["b"], SEED_MUETH["beta"]), "b:", label="Mueth b = 0.75, β = 1.5 (the seed's floor)")
+        N = fit_q_model(f).N
+        mu = fit_mueth(f, impose_mean=True)
+        a.plot(x, q_model_pdf(x, N), "r-", lw=1, label=f"q-model fit N = {N:.2g}")
+        a.plot(x, mueth_pdf(x, mu.b, mu.beta), "b-", lw=1, label=f"Mueth fit b = {mu.b:.2f}, β = {mu.beta:.2f}")
+        a.set_xlabel("f = F/<F>")
+        a.set_ylabel("P(f)")
+        a.set_title(f"{wall} (Fig. 35)")
+        a.legend(fontsize=7)
+    a = axs[2]
+    for wall, style in (("plate", "r-o"), ("floor", "b--s")):
+        f = pooled_f_snaps(ex["snapshots"], wall)
+        if f.size < 5:
+            continue
+        ls = load_support(f, bins=np.linspace(0, 5, 21))
+        a.plot(ls.centers, ls.density, style, ms=3, label=f"{wall}: small {ls.classes[(0.0, 0.5)]:.0%}, medium "
+               f"{ls.classes[(0.5, 2.0)]:.0%}, large {ls.classes[(2.0, np.inf)]:.0%}")
+    for v in (0.5, 2.0):
+        a.axvline(v, color="0.6", lw=0.7, ls=":")
+    a.set_xlabel("f = F/<F>")
+    a.set_ylabel("share of the load per unit f")
+    a.set_title("load support (Fig. 37)")
+    a.legend(fontsize=7)
+    return save_figure(fig, f"{outdir}/force_statistics.png")
+
+
+def micro_figure(ex, outdir) -> str:
+    """The bed's coordination, fabric and average stress (ch3 eq 3.17) against the plate stress during loading,
+    with the statics of a bed at rest (:func:`demflow.analysis.micro3d.statics_stress_zz`) for σ_zz."""
+    import matplotlib.pyplot as plt
+
+    from ..plotting import save_figure
+
+    c = ex["curve"]
+    on = c[c.settlement > 0]
+    sp = on.plate_stress / 1e3
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4))
+    axs[0].plot(sp, on.coordination, "k-", label="z (body pairs, walls left out)")
+    axs[0].plot(sp, on.coordination_walls, "k--", label="z with the plate and floor")
+    axs[0].set_ylabel("contacts per particle")
+    for k, style in (("xx", "r-"), ("yy", "g-"), ("zz", "b-")):
+        axs[1].plot(sp, on[f"fabric_{k}"], style, label=f"φ_{k}")
+    axs[1].axhline(1 / 3, color="0.6", lw=0.7, ls=":")
+    axs[1].set_ylabel("fabric of the contact normals")
+    for k, style in (("xx", "r-"), ("yy", "g-"), ("zz", "b-")):
+        axs[2].plot(sp, on[f"stress_{k}"] / 1e3, style, label=f"σ_{k}")
+    axs[2].plot(sp, on.stress_zz_statics / 1e3, "k:", label="σ_zz of statics: σ_plate + (W/A) Z̄/H")
+    axs[2].set_ylabel("average stress of the bed [kPa] (compression +)")
+    for a in axs:
+        a.set_xlabel("plate stress [kPa]")
+        a.legend(fontsize=7)
+    fig.suptitle("bed micro-state during loading")
+    return save_figure(fig, f"{outdir}/bed_micro_state.png")
 
 
 def bed_figures(ex, outdir) -> list:
     """The bed at the end of loading as a 3D picture (matplotlib: member spheres as points sized by radius,
     coloured by height) and as VTK for ParaView (``bed_end.vtu``: member centres with radius and body;
-    Glyph filter, sphere, scale by radius × 2), and the plate force map of the last snapshot (Miyata
-    Fig. 34 style: each particle touching the plate at its centre, disc area ∝ its force)."""
+    Glyph filter, sphere, scale by radius × 2), and the plate and floor force maps of the first snapshot
+    (400 kPa, Miyata Fig. 34: each particle touching the wall at its centre, disc area ∝ its force)."""
     import matplotlib.pyplot as plt
 
     from ..plotting import save_figure
@@ -733,28 +1187,33 @@ def bed_figures(ex, outdir) -> list:
 
     bed = ex["bed"]
     paths = [str(write_points(f"{outdir}/bed_end.vtu", bed["pos"], {"radius": bed["r"], "body": bed["body"].astype(float)}))]
-    fig = plt.figure(figsize=(11, 5))
-    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    fig = plt.figure(figsize=(16, 5))
+    ax = fig.add_subplot(1, 3, 1, projection="3d")
     pos, r = bed["pos"], bed["r"]
     ax.scatter(pos[:, 0], pos[:, 1], pos[:, 2], s=(r / r.max()) ** 2 * 60, c=pos[:, 2], cmap="viridis", depthshade=True)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
     ax.set_title(f"bed at the end of loading (plate at {bed['plate_z']:.3f} m)", fontsize=9)
-    a2 = fig.add_subplot(1, 2, 2)
     snaps = [s for s in ex["snapshots"] if s.get("plate_xy") is not None and len(s["plate"])]
-    if snaps:
-        s = snaps[-1]
-        L = bed["box"]
-        xy = np.mod(s["plate_xy"], L)
-        f = s["plate"]
-        a2.scatter(xy[:, 0], xy[:, 1], s=600 * f / f.max(), c="tab:red", alpha=0.6, edgecolors="k")
-        for (x, y), v in zip(xy, f):
-            a2.annotate(f"{v / 1e3:.0f} kN", (x, y), fontsize=7, ha="center", va="center")
+    L = bed["box"]
+    for k, wall in enumerate(("plate", "floor")):
+        a2 = fig.add_subplot(1, 3, 2 + k)
+        s = snaps[0] if snaps else None  # Fig. 34: the first snapshot, at 400 kPa
+        if s is None or s.get(f"{wall}_xy") is None or not len(s[wall]):
+            a2.set_axis_off()
+            continue
+        xy = np.mod(s[f"{wall}_xy"], L)
+        f = s[wall]
+        a2.scatter(xy[:, 0], xy[:, 1], s=600 * f / f.max() * min(1.0, 40.0 / f.size), c="tab:red"
+                   if wall == "plate" else "tab:blue", alpha=0.6, edgecolors="k", linewidths=0.4)
+        if f.size <= 40:
+            for (x, y), v in zip(xy, f):
+                a2.annotate(f"{v / 1e3:.0f} kN", (x, y), fontsize=7, ha="center", va="center")
         a2.set_xlim(0, L)
         a2.set_ylim(0, L)
         a2.set_aspect("equal")
-        a2.set_title(f"plate force map at {s['stress'] / 1e3:.0f} kPa (area ∝ force; {f.size} particles)")
+        a2.set_title(f"{wall} force map at {s['stress'] / 1e3:.0f} kPa (area ∝ force; {f.size} particles)", fontsize=9)
         a2.set_xlabel("x [m]")
         a2.set_ylabel("y [m]")
     paths.append(save_figure(fig, f"{outdir}/bed_and_plate_map.png"))

@@ -219,7 +219,7 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
             "compute bi all multisphere property inertia",
         ]
         if pas == 2:  # LIGGGHTS wants it before the first run
-            D.append("compute wc all wall/gran/local id force_normal ms_id")
+            D.append("compute wc all wall/gran/local pos id force_normal ms_id")
 
         def settle(tag):
             return [f"variable k{tag} loop {_i(nchk)}", f"label L{tag}", f"run {_i(chk)}",
@@ -254,8 +254,9 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
             f"variable ps equal f_plate[3]/{_f(L * L)}",
             "variable pfz equal f_plate[3]",
             f'fix rec all print {_i(R)} "$(step) ${{ffz}} ${{pfz}}" file curve_raw.txt screen no title none',
-            f"dump dw all local {_i(R)} walls.txt c_wc[1] c_wc[3] c_wc[4] c_wc[5] c_wc[6] c_wc[8]",
-            'dump_modify dw format "%g %g %.17g %.17g %.17g %g"',
+            # pos (6 values: the member's centre first) shifts id, force_normal and ms_id by 6
+            f"dump dw all local {_i(R)} walls.txt c_wc[7] c_wc[9] c_wc[10] c_wc[11] c_wc[12] c_wc[14] c_wc[1] c_wc[2]",
+            'dump_modify dw format "%g %g %.17g %.17g %.17g %g %.17g %.17g"',
             "run ${npos}",
             'print "DEMFLOW-PLATE ${s0} ${zt} ${npos}"',
             "label LL", f"run {_i(R)} pre no post no",
@@ -434,7 +435,7 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
         if len(steps) == 0 or np.any(np.diff(steps) != R) or steps[0] != s0 + R:
             raise _bad_output(outdir / "curve_raw.txt", None, f"its loading records are not every {R} steps from "
                               f"step {int(s0) + R}")
-        walls = _blocks(outdir / "walls.txt", 6)
+        walls = _blocks(outdir / "walls.txt", 8)
         missing = [int(s) for s in steps if int(s) not in walls]
         if missing:
             raise _bad_output(outdir / "walls.txt", None, f"no contact block for loading steps {missing[:5]}")
@@ -456,15 +457,15 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
                     raise _bad_output(outdir / "walls.txt", None, f"timestep {int(s)}: a contact's ms_id is not its "
                                       "atom's body")
             fn = np.linalg.norm(w[:, 2:5], axis=1) if len(w) else np.zeros(0)
-            per = {}
+            per, where = {}, {}
             for mesh, name in ((0.0, "floor"), (1.0, "plate")):
                 on = (w[:, 0] == mesh) & (fn > 0) if len(w) else np.zeros(0, bool)
-                f = np.bincount(w[on, 5].astype(np.int64), weights=fn[on], minlength=n + 1) if len(w) else np.zeros(1)
-                per[name] = f[f > 0]
+                per[name], where[name] = _per_body(w[on, 5].astype(np.int64), fn[on], w[on, 6:8], P["box"])
             rows.append((int(s - s0), zp, (touched - zp) if touched is not None else 0.0, plate, floor,
                          per["plate"].size, per["floor"].size))
             while levels and plate >= levels[0]:  # one snapshot per level reached (several at one record)
-                snaps += [(nsnap, plate, name, float(f)) for name in ("plate", "floor") for f in per[name]]
+                snaps += [(nsnap, plate, name, float(f), float(x), float(y)) for name in ("plate", "floor")
+                          for f, (x, y) in zip(per[name], where[name])]
                 nsnap += 1
                 levels.pop(0)
         ml = re.search(r"^DEMFLOW-LOADED (\S+) (\S+) (\S+)\s*$", text, flags=re.M)
@@ -533,6 +534,21 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
                 raise _bad_output(path, None, f"body {b}: its member spheres are not the template's (radii or "
                                   "pairwise distances differ): the atom → body map is wrong")
         return body
+
+
+def _per_body(body: np.ndarray, fn: np.ndarray, xy: np.ndarray, L: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per body (ascending id) touching a wall: its members' normal forces summed, and where it touches: the
+    force-weighted mean of its touching members' centres (minimum image from its first one, wrapped into
+    [0, L)), as :func:`demflow.cases.miyata_uniaxial3d.wall_contact_points` does for demflow."""
+    if body.size == 0:
+        return np.zeros(0), np.zeros((0, 2))
+    _, first, inv = np.unique(body, return_index=True, return_inverse=True)
+    ref = xy[first]
+    d = xy - ref[inv]
+    d -= L * np.round(d / L)
+    f = np.bincount(inv, weights=fn)
+    mean = np.column_stack([np.bincount(inv, weights=fn * d[:, k]) for k in range(2)]) / f[:, None]
+    return f, np.mod(ref + mean, L)
 
 
 def _blocks(path: Path, ncol: int, atoms: bool = False) -> dict:

@@ -20,8 +20,10 @@ What every engine deck writes into its working directory (read by :func:`read_un
   plate_contacts, floor_contacts (particles, not member spheres, touching);
 - ``snapshots.csv``: :data:`SNAPSHOT_COLUMNS`: snapshot (0, 1, ...), stress (the plate stress when
   it was taken [Pa]), wall ("plate" or "floor"), force (one particle's normal force on that wall,
-  the sum over its member spheres [N]); one snapshot when the plate stress first reaches each of
-  ``snapshot_levels``.
+  the sum over its member spheres [N]), x, y (where the particle touches the wall: the normal-force-
+  weighted mean of its touching members' centres, periodic minimum image, wrapped into the box [m];
+  :func:`demflow.cases.miyata_uniaxial3d.wall_contact_points`); one snapshot when the plate stress first
+  reaches each of ``snapshot_levels``.
 """
 from __future__ import annotations
 
@@ -36,7 +38,7 @@ import pandas as pd
 from .base import EngineOutputError
 
 CURVE_COLUMNS = ("step", "plate_z", "settlement", "plate_stress", "floor_stress", "plate_contacts", "floor_contacts")
-SNAPSHOT_COLUMNS = ("snapshot", "stress", "wall", "force")
+SNAPSHOT_COLUMNS = ("snapshot", "stress", "wall", "force", "x", "y")
 OUT_KEYS = ("n_inserted", "n_particles", "weight", "floor_settled", "settle_steps", "dt", "plate_start", "clump_mass",
             "clump_inertia")
 SETTLE_CHECK_EVERY = 5000  # steps between at-rest checks (demflow.cases.miyata_uniaxial3d.settle)
@@ -104,6 +106,11 @@ class UniaxialRun:
     snapshots: pd.DataFrame
     meta: dict = field(default_factory=dict)
 
+    def snapshot_points(self, wall: str, snapshot: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """(forces, (x, y) contact points) of the particles on ``wall`` in snapshot ``snapshot`` (Fig. 34)."""
+        s = self.snapshots[(self.snapshots.wall == wall) & (self.snapshots.snapshot == snapshot)]
+        return s.force.to_numpy(), s[["x", "y"]].to_numpy(float)
+
     def snapshot_forces(self, wall: str) -> list[np.ndarray]:
         """Per-particle normal forces on ``wall`` ("plate" or "floor"), one array per snapshot."""
         s = self.snapshots[self.snapshots.wall == wall]
@@ -132,7 +139,9 @@ class UniaxialRun:
         rows = []
         for k, s in enumerate(extras["snapshots"]):
             for wall in ("plate", "floor"):
-                rows += [(k, float(s["stress"]), wall, float(f)) for f in s[wall]]
+                xy = s.get(f"{wall}_cxy")  # (runs checkpointed before the contact points were kept: nan)
+                xy = np.full((len(s[wall]), 2), np.nan) if xy is None else xy
+                rows += [(k, float(s["stress"]), wall, float(f), float(x), float(y)) for f, (x, y) in zip(s[wall], xy)]
         snaps = pd.DataFrame(rows, columns=list(SNAPSHOT_COLUMNS))
         meta = dict(engine=engine, n_particles=int(extras["n_particles"]), weight=float(extras["weight"]),
                     floor_settled=float(extras["floor_settled"]), settle_steps=[int(s) for s in extras["settle_steps"]],
