@@ -198,3 +198,15 @@ def test_an_engine_without_local_damping_is_counted_against_the_undamped_band():
     assert len(shown) == 1 and "OUTSIDE" in shown[0].name
     yade = [c for c in checks if c.name.startswith("yade: plate height at 400 kPa") and not c.informative]
     assert len(yade) == 1 and "no local damping" not in yade[0].name and yade[0].passed
+
+
+def test_leave_one_out_counts_how_often_a_fair_draw_misses_the_band():
+    """Eight seeds of one statistic spread 1.0-1.07 and an outlier (1.2): only the outlier misses the other
+    eight's band (1 of 9 judged); a statistic whose band is wider than the informative limit is not judged
+    while inside it."""
+    from demflow.cases.miyata_uniaxial3d import leave_one_out_misses
+
+    vals = [1.0, 1.01, 1.02, 1.03, 1.04, 1.05, 1.06, 1.07, 1.2]
+    per_seed = {k: {"narrow": v, "wide": [0.1, 5.0, 0.2, 4.0, 0.3, 3.0, 0.5, 2.0, 1.0][k]} for k, v in enumerate(vals)}
+    judged, outside = leave_one_out_misses(per_seed)
+    assert (judged, outside) == (9, 1)

@@ -373,6 +373,28 @@ def band_summary(band: dict):
             np.concatenate([pooled_f(v) for v in band.values()]))
 
 
+def leave_one_out_misses(per_seed: dict) -> tuple[int, int]:
+    """(judged, outside): each seed's :func:`run_statistics` against the 95 % band of the other seeds, judged by
+    the engines' rule (a band wider than the informative limit only counts a value outside it) — how often
+    demflow itself would miss."""
+    keys = list(next(iter(per_seed.values())))
+    judged = outside = 0
+    for s, st in per_seed.items():
+        for k in keys:
+            vals = [v[k] for q, v in per_seed.items() if q != s]
+            lo, hi = band_of(vals)
+            finite = [x for x in vals if math.isfinite(x)]
+            if not (finite and math.isfinite(lo) and math.isfinite(st[k])):
+                continue
+            mean = float(np.mean(finite))
+            inside = lo <= st[k] <= hi
+            if inside and not (0.5 * (hi - lo) <= BAND_INFORMATIVE * abs(mean)):
+                continue  # a pass of a too-wide band is not judged
+            judged += 1
+            outside += not inside
+    return judged, outside
+
+
 def engine_of(label: str) -> str:
     """The engine of a run label ("yade seed2" → "yade")."""
     return label.split()[0]
@@ -709,6 +731,17 @@ class MiyataUniaxial3D(Case):
                     if len(band) < 3:
                         continue
                     out += self._band_checks(label, u, summaries[id(band)], name, band is matched)
+        for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
+            if len(band) >= 4:
+                judged, outside = leave_one_out_misses(summaries[id(band)][0])
+                out.append(Check.info(
+                    f"demflow's own seeds judged like an engine run, each against the band of the other "
+                    f"{len(band) - 1}{name}: {outside} of {judged} judged statistics outside", outside / max(judged, 1),
+                    SRC, "The rate at which a fair draw of demflow itself misses a band by the rule the engine runs are "
+                    "judged by (statistics in a band wider than the informative limit are not judged); a 95 % "
+                    "prediction band of normal data misses 5 % of single draws, and the statistics of one run are "
+                    "correlated (a bed that stands low misses every plate height), so misses come in groups. Read "
+                    "an engine run's misses against this rate.", reference=0.05))
         return out
 
     @staticmethod

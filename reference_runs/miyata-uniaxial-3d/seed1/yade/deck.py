@@ -192,6 +192,8 @@ near_walls()
 
 
 def per_particle(wall):
+    """{clump id: [normal force, x, y]} on the wall: the members' forces summed, and where the clump touches
+    (the force-weighted mean of its touching members' centres, minimum image from its first one, wrapped)."""
     f = {}
     for i in O.interactions.withBody(wall):
         if not i.isReal:
@@ -200,8 +202,16 @@ def per_particle(wall):
         fn = i.phys.normalForce.norm()
         if fn > 0.0:
             c = O.bodies[other].clumpId
-            f[c] = f.get(c, 0.0) + fn
-    return f
+            pos = O.bodies[other].state.pos
+            if c not in f:
+                f[c] = [0.0, 0.0, 0.0, pos[0], pos[1]]
+            e = f[c]
+            dx = pos[0] - e[3]
+            dy = pos[1] - e[4]
+            e[0] += fn
+            e[1] += fn * (dx - L * round(dx / L))
+            e[2] += fn * (dy - L * round(dy / L))
+    return {c: [e[0], (e[3] + e[1] / e[0]) % L, (e[4] + e[2] / e[0]) % L] for c, e in f.items()}
 
 
 rows, snaps = [], []
@@ -219,10 +229,9 @@ while True:
         touched = zp
     fp, ff = per_particle(plate), per_particle(floor)
     rows.append([step, zp, (touched - zp) if touched is not None else 0.0, ps, fs, len(fp), len(ff)])
-    while levels and ps >= levels[0]:
-        k = len(snaps)
-        snaps += [[k, ps, "plate", v] for v in fp.values()] + [[k, ps, "floor", v] for v in ff.values()]
-        snaps.append(None)  # marks the end of one snapshot
+    while levels and ps >= levels[0]:  # snapshot numbers 0, 1, ... in the order taken
+        k = len(P["snapshot_levels"]) - len(levels)
+        snaps += [[k, ps, name, v] for name, per in (("plate", fp), ("floor", ff)) for v in per.values()]
         levels.pop(0)
     if step % (25 * int(P["record_every"])) == 0:
         print(f"loading: {step} steps, plate at {zp:.4f} m, plate stress {ps / 1e3:.1f} kPa", flush=True)
@@ -238,16 +247,10 @@ def write_csv(name, header, data):
     os.replace(name + ".tmp", name)
 
 
-# snapshot numbers: 0, 1, ... in the order taken
-k, out = 0, []
-for r in snaps:
-    if r is None:
-        k += 1
-    else:
-        out.append([k, r[1], r[2], repr(r[3])])
 write_csv("curve.csv", ["step", "plate_z", "settlement", "plate_stress", "floor_stress", "plate_contacts",
                         "floor_contacts"], [[r[0]] + [repr(float(v)) for v in r[1:5]] + r[5:] for r in rows])
-write_csv("snapshots.csv", ["snapshot", "stress", "wall", "force"], [[r[0], repr(r[1]), r[2], r[3]] for r in out])
+write_csv("snapshots.csv", ["snapshot", "stress", "wall", "force", "x", "y"],
+          [[r[0], repr(r[1]), r[2]] + [repr(float(v)) for v in r[3]] for r in snaps])
 st = O.bodies[clumps[0]].state
 res = dict(n_inserted=n_inserted, n_particles=len(clumps), weight=weight, floor_settled=floor_settled,
            settle_steps=[steps1, steps2], dt=dt, plate_start=plate_start, clump_mass=st.mass,
