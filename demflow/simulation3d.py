@@ -109,10 +109,14 @@ class Simulation3D:
         i, j, shift = sphere_pairs(sp.pos, sp.r, self.skin, self.box, self.planes.point, self.planes.normal,
                                    self.planes.is_mesh, self.tris.v, sp.body)
         old = self.pairs
-        hist = carry_history(old.i, old.j, old.hist, i, j, self.n + self.n_planes + self.tris.v.shape[0])
-        m = i.size
-        self.pairs = Pairs3(i=i, j=j, hist=hist, shift=shift, fn=np.zeros(m), ft=np.zeros((m, 3)),
-                            ovl=np.zeros(m), slide=np.zeros(m, np.int8))
+        w = old.hist.shape[1]
+        # the history, and the last step's forces, overlaps and sliding flags (what a reader of the contacts sees
+        # until the next step: a run that ends on a rebuild would otherwise show no contact at all)
+        carried = carry_history(old.i, old.j, np.column_stack([old.hist, old.fn, old.ft, old.ovl, old.slide]), i, j,
+                                self.n + self.n_planes + self.tris.v.shape[0])
+        self.pairs = Pairs3(i=i, j=j, hist=np.ascontiguousarray(carried[:, :w]), shift=shift,
+                            fn=np.ascontiguousarray(carried[:, w]), ft=np.ascontiguousarray(carried[:, w + 1:w + 4]),
+                            ovl=np.ascontiguousarray(carried[:, w + 4]), slide=carried[:, w + 5].astype(np.int8))
         sp.ref[:] = sp.pos
         self.planes.ref[:] = self.planes.point
         self.n_rebuilds += 1
@@ -469,7 +473,8 @@ class Simulation3D:
         out.update({f"body_{k}": getattr(self.bodies, k) for k in _BODY_STATE})
         out.update(alpha_now=self.damping.alpha_now, prev_r=self.damping.prev_r, prev_dx=self.damping.prev_dx,
                    plane_point=self.planes.point, tri_v=self.tris.v, plane_vel=self.planes.vel, plane_force=self.planes.force,
-                   pair_i=self.pairs.i, pair_j=self.pairs.j, hist=self.pairs.hist, work=self.work)
+                   pair_i=self.pairs.i, pair_j=self.pairs.j, hist=self.pairs.hist, work=self.work,
+                   pair_fn=self.pairs.fn, pair_ft=self.pairs.ft, pair_ovl=self.pairs.ovl, pair_slide=self.pairs.slide)
         return out
 
     def _set_state(self, s: dict) -> None:
@@ -487,8 +492,16 @@ class Simulation3D:
         self.work[:] = 0.0
         self.work[:w.shape[0]] = w  # a checkpoint of an older demflow keeps fewer accounts
         w = self.width
+        m = np.asarray(s["pair_i"]).size
+        # the last step's pair outputs (a checkpoint of an older demflow has none: zero until the next step)
         self.pairs = self.pairs._replace(i=np.array(s["pair_i"], np.int64), j=np.array(s["pair_j"], np.int64),
-                                         hist=np.array(s["hist"], np.float64).reshape(-1, w))
+                                         hist=np.array(s["hist"], np.float64).reshape(-1, w),
+                                         fn=np.array(s["pair_fn"], np.float64) if "pair_fn" in s else np.zeros(m),
+                                         ft=np.array(s["pair_ft"], np.float64).reshape(-1, 3) if "pair_ft" in s
+                                         else np.zeros((m, 3)),
+                                         ovl=np.array(s["pair_ovl"], np.float64) if "pair_ovl" in s else np.zeros(m),
+                                         slide=np.array(s["pair_slide"], np.int8) if "pair_slide" in s
+                                         else np.zeros(m, np.int8))
         self.rebuild()
 
     def _copy_state(self):
