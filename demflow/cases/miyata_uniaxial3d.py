@@ -1,11 +1,13 @@
-"""miyata-uniaxial-3d: uniaxial compression of ellipsoid-like clumps (Miyata §3.3), reduced variant.
+"""miyata-uniaxial-3d: uniaxial compression of ellipsoid-like clumps (Miyata §3.3), reduced and full variants.
 
 The seed's protocol: particles inserted in a box periodic in x and y, settled under gravity, those
 with centres above 2.0 m removed, settled again, a plate placed at the top and lowered at 2 cm/s;
 Hertz E = 70 GPa, ν = 0.2 (particles and plate), μ = 0.6; particles 191 kg with semi-axes 37.1,
 26.0 and 18.2 cm.  The seed used 1500 ellipsoids in a 10 × 10 m box (1469 after trimming, floor
 self-weight 1469 × 191 × 9.81 / 100 = 27.5 kPa); the reduced variant here keeps the bed depth,
-the particle, the stresses and the plate speed and shrinks the box.
+the particle, the stresses and the plate speed and shrinks the box; ``miyata-uniaxial-3d-full`` is the
+seed's 1500 particles in its 10 × 10 m box (resumable from checkpoints), on which the seed's statements
+(Figs 32, 33, 35, 37) are judged.
 
 Assumptions (stated on the report): particles are K-sphere clumps of the ellipsoid (the greedy
 cover of :mod:`demflow.shapes.clump`, scaled to 191 kg; K = 8 by default: 69 % of the ellipsoid's
@@ -373,12 +375,13 @@ def band_summary(band: dict):
             np.concatenate([pooled_f(v) for v in band.values()]))
 
 
-def leave_one_out_misses(per_seed: dict) -> tuple[int, int]:
-    """(judged, outside): each seed's :func:`run_statistics` against the 95 % band of the other seeds, judged by
-    the engines' rule (a band wider than the informative limit only counts a value outside it) — how often
-    demflow itself would miss."""
+def leave_one_out_misses(per_seed: dict) -> tuple[int, int, int]:
+    """(judged, outside, seeds with a miss): each seed's :func:`run_statistics` against the 95 % band of the other
+    seeds, judged by the engines' rule (a band wider than the informative limit only counts a value outside it)
+    — how often demflow itself would miss, per statistic and per run."""
     keys = list(next(iter(per_seed.values())))
     judged = outside = 0
+    missed = set()
     for s, st in per_seed.items():
         for k in keys:
             vals = [v[k] for q, v in per_seed.items() if q != s]
@@ -392,7 +395,9 @@ def leave_one_out_misses(per_seed: dict) -> tuple[int, int]:
                 continue  # a pass of a too-wide band is not judged
             judged += 1
             outside += not inside
-    return judged, outside
+            if not inside:
+                missed.add(s)
+    return judged, outside, len(missed)
 
 
 def engine_of(label: str) -> str:
@@ -733,10 +738,11 @@ class MiyataUniaxial3D(Case):
                     out += self._band_checks(label, u, summaries[id(band)], name, band is matched)
         for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
             if len(band) >= 4:
-                judged, outside = leave_one_out_misses(summaries[id(band)][0])
+                judged, outside, seeds = leave_one_out_misses(summaries[id(band)][0])
                 out.append(Check.info(
                     f"demflow's own seeds judged like an engine run, each against the band of the other "
-                    f"{len(band) - 1}{name}: {outside} of {judged} judged statistics outside", outside / max(judged, 1),
+                    f"{len(band) - 1}{name}: {outside} of {judged} judged statistics outside, {seeds} of {len(band)} "
+                    "seeds with at least one miss", outside / max(judged, 1),
                     SRC, "The rate at which a fair draw of demflow itself misses a band by the rule the engine runs are "
                     "judged by (statistics in a band wider than the informative limit are not judged); a 95 % "
                     "prediction band of normal data misses 5 % of single draws, and the statistics of one run are "
@@ -1212,7 +1218,8 @@ def bed_figures(ex, outdir) -> list:
     """The bed at the end of loading as a 3D picture (matplotlib: member spheres as points sized by radius,
     coloured by height) and as VTK for ParaView (``bed_end.vtu``: member centres with radius and body;
     Glyph filter, sphere, scale by radius × 2), and the plate and floor force maps of the first snapshot
-    (400 kPa, Miyata Fig. 34: each particle touching the wall at its centre, disc area ∝ its force)."""
+    (400 kPa, Miyata Fig. 34: each particle where it touches the wall, :func:`wall_contact_points` — its centre
+    for runs kept before those points were — disc area ∝ its force)."""
     import matplotlib.pyplot as plt
 
     from ..plotting import save_figure
@@ -1236,7 +1243,7 @@ def bed_figures(ex, outdir) -> list:
         if s is None or s.get(f"{wall}_xy") is None or not len(s[wall]):
             a2.set_axis_off()
             continue
-        xy = np.mod(s[f"{wall}_xy"], L)
+        xy = np.mod(s[f"{wall}_cxy"] if s.get(f"{wall}_cxy") is not None else s[f"{wall}_xy"], L)
         f = s[wall]
         a2.scatter(xy[:, 0], xy[:, 1], s=600 * f / f.max() * min(1.0, 40.0 / f.size), c="tab:red"
                    if wall == "plate" else "tab:blue", alpha=0.6, edgecolors="k", linewidths=0.4)
