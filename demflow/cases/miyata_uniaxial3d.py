@@ -226,18 +226,12 @@ def wall_contact_points(sim, wall: int, box: float) -> np.ndarray:
     (x, y) of its member spheres' centres on that wall (periodic: relative to its first touching member by the
     minimum image), wrapped into [0, box); rows in the order of :func:`per_particle_forces` (ascending body).
     The point every engine's force map draws (Miyata Fig. 34: the force at each contact point)."""
+    from ..engines.uniaxial3d import per_particle_contacts
+
     pr = sim.pairs
     on = (pr.j == sim.n + wall) & (pr.fn > 0)
-    i, w = pr.i[on], pr.fn[on]
-    body = sim.spheres.body[i]
-    _, first, inv = np.unique(body, return_index=True, return_inverse=True)
-    xy = sim.spheres.pos[i, :2]
-    ref = xy[first]
-    d = xy - ref[inv]
-    d -= box * np.round(d / box)
-    wsum = np.bincount(inv, weights=w)
-    mean = np.column_stack([np.bincount(inv, weights=w * d[:, k]) for k in range(2)]) / wsum[:, None]
-    return np.mod(ref + mean, box)
+    i = pr.i[on]
+    return per_particle_contacts(sim.spheres.body[i], pr.fn[on], sim.spheres.pos[i, :2], box)[1]
 
 
 STRESS_LEVELS_KPA = (100, 200, 300, 400, 500, 600)  # the curve sampled at fixed stresses (every run reaches them)

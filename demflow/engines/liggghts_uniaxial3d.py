@@ -73,7 +73,7 @@ from .base import (EngineFailed, EngineOutputError, EngineRun, EngineTimeout, En
                    sha256)
 from .liggghts import LiggghtsEngine, _bad_output, _numbers, _read_rows, _text, dump_blocks
 from .liggghts3d import _f, restitution_for_zeta
-from .uniaxial3d import CURVE_COLUMNS, SNAPSHOT_COLUMNS, protocol_numbers, read_uniaxial_output
+from .uniaxial3d import CURVE_COLUMNS, SNAPSHOT_COLUMNS, per_particle_contacts, protocol_numbers, read_uniaxial_output
 
 POSITION_SPEED = 50.0  # [m/s] the plate's speed when it is brought down to its start height (touches nothing)
 PACKING = 0.2  # bounding-sphere volume fraction of the insertion region
@@ -460,7 +460,7 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
             per, where = {}, {}
             for mesh, name in ((0.0, "floor"), (1.0, "plate")):
                 on = (w[:, 0] == mesh) & (fn > 0) if len(w) else np.zeros(0, bool)
-                per[name], where[name] = _per_body(w[on, 5].astype(np.int64), fn[on], w[on, 6:8], P["box"])
+                per[name], where[name] = per_particle_contacts(w[on, 5].astype(np.int64), fn[on], w[on, 6:8], P["box"])
             rows.append((int(s - s0), zp, (touched - zp) if touched is not None else 0.0, plate, floor,
                          per["plate"].size, per["floor"].size))
             while levels and plate >= levels[0]:  # one snapshot per level reached (several at one record)
@@ -534,21 +534,6 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
                 raise _bad_output(path, None, f"body {b}: its member spheres are not the template's (radii or "
                                   "pairwise distances differ): the atom → body map is wrong")
         return body
-
-
-def _per_body(body: np.ndarray, fn: np.ndarray, xy: np.ndarray, L: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per body (ascending id) touching a wall: its members' normal forces summed, and where it touches: the
-    force-weighted mean of its touching members' centres (minimum image from its first one, wrapped into
-    [0, L)), as :func:`demflow.cases.miyata_uniaxial3d.wall_contact_points` does for demflow."""
-    if body.size == 0:
-        return np.zeros(0), np.zeros((0, 2))
-    _, first, inv = np.unique(body, return_index=True, return_inverse=True)
-    ref = xy[first]
-    d = xy - ref[inv]
-    d -= L * np.round(d / L)
-    f = np.bincount(inv, weights=fn)
-    mean = np.column_stack([np.bincount(inv, weights=fn * d[:, k]) for k in range(2)]) / f[:, None]
-    return f, np.mod(ref + mean, L)
 
 
 def _blocks(path: Path, ncol: int, atoms: bool = False) -> dict:

@@ -53,6 +53,22 @@ def _finite(v, what) -> float:
     return f
 
 
+def per_particle_contacts(body: np.ndarray, fn: np.ndarray, xy: np.ndarray, L: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per particle (ascending body id) touching a wall, from its member contacts (``body`` of each, normal force
+    ``fn``, member centre ``xy``): the forces summed, and where it touches: the force-weighted mean of its touching
+    members' centres (minimum image from its first one, wrapped into [0, L)); what the snapshots' force, x and y
+    are in every engine."""
+    if body.size == 0:
+        return np.zeros(0), np.zeros((0, 2))
+    _, first, inv = np.unique(body, return_index=True, return_inverse=True)
+    ref = xy[first]
+    d = xy - ref[inv]
+    d -= L * np.round(d / L)
+    f = np.bincount(inv, weights=fn)
+    mean = np.column_stack([np.bincount(inv, weights=fn * d[:, k]) for k in range(2)]) / f[:, None]
+    return f, np.mod(ref + mean, L)
+
+
 def protocol_numbers(scene, sim, p: dict) -> dict:
     """The uniaxial protocol of case parameters ``p`` as plain validated numbers, from the insertion
     scene ``scene`` (clumps on demflow's lattice with its seeded orientations) and its built ``sim``.
