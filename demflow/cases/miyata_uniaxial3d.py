@@ -701,7 +701,7 @@ class MiyataUniaxial3D(Case):
 
         A = ex["area"]
         fp, ff = pooled_f_snaps(ex["snapshots"], "plate"), pooled_f_snaps(ex["snapshots"], "floor")
-        return [Check.info("q-model N of the plate forces (per particle, 10 snapshots at 400-600 kPa)",
+        return [Check.info(f"q-model N of the plate forces (per particle, {len(ex['snapshots'])} snapshots at 400-600 kPa)",
                            fit_q_model(fp).N, SRC, "The seed: plate PDF close to the q-model with N = 3.", reference=3.0),
                 Check.info("q-model N of the floor forces (per particle)", fit_q_model(ff).N, SRC,
                            "The seed fits the floor with Mueth et al. (a = 3, b = 0.75, β = 1.5) instead."),
