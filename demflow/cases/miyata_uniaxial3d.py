@@ -271,16 +271,20 @@ def run_statistics(u) -> dict:
 BAND_INFORMATIVE = tol("miyata3d.band-informative").value  # a wider seed band judges nothing: shown, not counted
 
 
-def pooled_f(u, wall: str = "plate") -> np.ndarray:
-    """f = F/<F> per particle on ``wall``, each snapshot normalised by its own mean, pooled."""
-    fs = [f for f in u.snapshot_forces(wall) if f.size]
+def _pooled(forces) -> np.ndarray:
+    """Per-snapshot force arrays, each normalised by its own mean (f = F/<F>), pooled; empty ones left out."""
+    fs = [np.asarray(f) for f in forces if len(f)]
     return np.concatenate([f / f.mean() for f in fs]) if fs else np.zeros(0)
+
+
+def pooled_f(u, wall: str = "plate") -> np.ndarray:
+    """f = F/<F> per particle on ``wall`` of a :class:`~demflow.engines.uniaxial3d.UniaxialRun`, pooled."""
+    return _pooled(u.snapshot_forces(wall))
 
 
 def pooled_f_snaps(snaps, wall: str) -> np.ndarray:
-    """f = F/<F> per particle on ``wall`` over demflow's snapshots (each normalised by its own mean), pooled."""
-    fs = [s[wall] for s in snaps if len(s[wall])]
-    return np.concatenate([f / f.mean() for f in fs]) if fs else np.zeros(0)
+    """f = F/<F> per particle on ``wall`` over demflow's snapshots (the protocol's dicts), pooled."""
+    return _pooled(s[wall] for s in snaps)
 
 
 def cluster_bootstrap(snaps, wall: str, statistic, n_resamples: int, level: float) -> tuple[float, float]:
@@ -509,14 +513,13 @@ def protocol_run(p) -> dict:
             row, fp, ff, m = _loading_row(s3, A, st["touched"], weight)
             st["rows"].append(row)
             while st["levels"] and plate >= st["levels"][0]:
-                st["snaps"].append({"stress": plate, "plate": fp, "floor": ff,
-                                    "plate_ids": plate_touching(s3, 1), "floor_ids": plate_touching(s3, 0),
-                                    "plate_xy": s3.bodies.pos[plate_touching(s3, 1), :2].copy(),
-                                    "floor_xy": s3.bodies.pos[plate_touching(s3, 0), :2].copy(),
-                                    "plate_cxy": wall_contact_points(s3, 1, p["box"]),
-                                    "floor_cxy": wall_contact_points(s3, 0, p["box"]),
-                                    "fabric": m["fabric"], "stress_tensor": m["stress"],
-                                    "coordination": m["coordination"]})
+                snap = {"stress": plate, "plate": fp, "floor": ff, "fabric": m["fabric"], "stress_tensor": m["stress"],
+                        "coordination": m["coordination"]}
+                for wall, k in (("plate", 1), ("floor", 0)):
+                    ids = plate_touching(s3, k)
+                    snap.update({f"{wall}_ids": ids, f"{wall}_xy": s3.bodies.pos[ids, :2].copy(),
+                                 f"{wall}_cxy": wall_contact_points(s3, k, p["box"])})
+                st["snaps"].append(snap)
                 st["levels"].pop(0)
             st["finished"] = bool(plate >= p["stress_max"] or zp < p["plate_z_min"])
             now = max(0, min(int(plate / 1e3), int(round(p["stress_max"] / 1e3))))
