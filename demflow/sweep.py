@@ -26,12 +26,17 @@ import pandas as pd
 
 
 def _client(scheduler, workers):
+    import dask
     from dask.distributed import Client, LocalCluster
 
     if scheduler in (None, "local"):
         n = int(workers or os.cpu_count() or 1)
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=40)
+        # Dask's statistical profiler samples every worker thread each 10 ms; the runs are long kernel
+        # calls a stack sample says nothing about, and it cost 3-5 % of each run's wall time (measured
+        # on thesis-simple-shear, benchmarks/bench_sweep.py).  Only this cluster's workers are affected.
+        with dask.config.set({"distributed.worker.profile.enabled": False}):
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                                   silence_logs=40)
         return Client(cluster), cluster
     return Client(scheduler), None
 
