@@ -265,16 +265,20 @@ def _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies) ->
     return float(safe_time_step_3d(r, mass, mat, pair_laws, wall_laws, partners=partners, inertia=inertia)["dt"])
 
 
-def _check_safe_step(scene, dt: float, dt_safe: float) -> None:
-    """Refuse a step above the safe estimate (warn with allow_unsafe_dt; allow_supercritical accepts it)."""
+SPHERES_ESTIMATE = ("spheres (demflow.integrate.safe_time_step_3d: every sphere with as many neighbours as can "
+                    "touch it, rotations coupled by the tangential springs, dashpots, Hertzian stiffness at overlaps "
+                    "up to scene.max_overlap={max_overlap:g} of the smaller radius)")
+
+
+def _check_safe_step(scene, dt: float, dt_safe: float, estimate: str = SPHERES_ESTIMATE) -> None:
+    """Refuse a step above the safe estimate (warn with allow_unsafe_dt; allow_supercritical accepts it).
+    ``estimate`` says what the estimate assumes ("{max_overlap}" is filled in)."""
     if dt <= dt_safe or scene.allow_supercritical:
         return
     field = f"scene.dt={dt:.6g}" if scene.dt is not None else (f"scene.dt_fraction={scene.dt_fraction:g} gives "
                                                                f"dt={dt:.6g}, which")
-    what = (f"{field} is above the safe critical time step {dt_safe:.6g} of a packing of these spheres "
-            f"(demflow.integrate.safe_time_step_3d: every sphere with as many neighbours as can touch it, rotations "
-            f"coupled by the tangential springs, dashpots, Hertzian stiffness at overlaps up to "
-            f"scene.max_overlap={scene.max_overlap:g} of the smaller radius)")
+    what = (f"{field} is above the safe critical time step {dt_safe:.6g} of a packing of these "
+            + estimate.format(max_overlap=scene.max_overlap))
     if scene.allow_unsafe_dt:
         import warnings
 

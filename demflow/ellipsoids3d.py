@@ -17,8 +17,8 @@ import math
 
 import numpy as np
 
-from .build3d import (_array, _common_length, _law_family, _skin_and_box, _walls, particle_materials, quat_to_matrix,
-                      rayleigh_time_step)
+from .build3d import (_array, _check_safe_step, _common_length, _law_family, _skin_and_box, _walls,
+                      particle_materials, quat_to_matrix, rayleigh_time_step)
 from .contacts.ellipsoids import WARM_COLUMNS
 from .laws.hertz_mindlin import HertzMindlin
 from .scene import SceneError
@@ -141,6 +141,8 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
             raise SceneError(f"scene.dt={dt:.6g} exceeds the critical estimate {dt_crit:.6g} ({how}); give a "
                              "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
                              "allow_supercritical=True")
+    dt_safe = _safe_step_ellipsoids(scene, family, axes, mass, moments, mat, index, walls)
+    _check_safe_step(scene, dt, dt_safe, ELLIPSOIDS_ESTIMATE)
     P = np.zeros((n, 16))
     sp = Spheres3(pos=pos, vel=vel, angvel=w, quat=q.copy(), r=r, mass=mass, inertia=moments.mean(axis=1),
                   inv_r2=1.0 / r ** 2, mat=mat, fixed=np.full(n, 2, np.int8), body=np.arange(n, dtype=np.int64),
@@ -151,13 +153,107 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
     d = scene.damping
     sim = SimulationEllipsoids(
         ellipsoids=ell, scene=scene, spheres=sp, bodies=bodies, planes=planes, tris=tris, loading=loading, law=family,
-        law_params=params, box=box, dt=dt, dt_crit=dt_crit, skin=skin, gravity=scene.gravity,
+        law_params=params, box=box, dt=dt, dt_crit=dt_crit, dt_safe=dt_safe, skin=skin, gravity=scene.gravity,
         width=width + WARM_COLUMNS,
         damping=Damping3(alpha=float(d.alpha), c_abs=float(d.C), c_rot_abs=float(d.C_rot),
                          local=float(scene.local_damping), adaptive=False, alpha_now=np.zeros(1),
                          prev_r=np.zeros((0, 3)), prev_dx=np.zeros((0, 3))))
     _refuse_initial_overlaps(sim)
     return sim
+
+
+ELLIPSOIDS_ESTIMATE = (
+    "ellipsoids (demflow.ellipsoids3d._safe_step_ellipsoids: each ellipsoid a rigid body, a contact force moving "
+    "its surface point through the body's translation and rotation; Hertzian stiffness at the largest Gaussian "
+    "radius of curvature ab/c and overlaps up to scene.max_overlap={max_overlap:g} of the smallest semi-axis; "
+    "as many contacts as spheres the size of the thinnest semi-axis can touch the bounding sphere; dashpots)")
+
+MOBILITY_MARGIN = 1.01  # the sampled surface maxima below are raised by 1 % (grid error measured < 0.1 %)
+
+
+def surface_mobility(axes, mass: float, moments) -> tuple[float, float]:
+    """The largest mobility [1/mass] of a surface point of an ellipsoid (semi-axes ``axes``, principal moments
+    ``moments`` along them) under a unit force along the surface normal, and along a tangent: 1/m + (r × u)ᵀ
+    I⁻¹ (r × u), maximised over the surface (a 90 × 180 grid of the ellipsoid's angles; tangent: the largest
+    eigenvalue over the tangent plane), times MOBILITY_MARGIN.  A sphere: (1/m, 1/m + R²/I) = (1/m, 3.5/m)."""
+    a = np.asarray(axes, np.float64)
+    th, ph = np.meshgrid(np.linspace(0.0, math.pi, 91), np.linspace(0.0, 2.0 * math.pi, 181), indexing="ij")
+    u = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1).reshape(-1, 3)
+    r = u * a
+    n = r / a ** 2
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    inv_i = 1.0 / np.asarray(moments, np.float64)
+    rn = np.cross(r, n)
+    normal = float(np.max(np.sum(rn * rn * inv_i, 1)))
+    # the tangent plane: two unit vectors t1, t2 ⊥ n; the quadratic form of t ↦ (r × t)ᵀ I⁻¹ (r × t) on it
+    helper = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    t1 = np.cross(n, helper)
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
+    t2 = np.cross(n, t1)
+    c1, c2 = np.cross(r, t1), np.cross(r, t2)
+    q11, q22, q12 = (np.sum(c1 * c1 * inv_i, 1), np.sum(c2 * c2 * inv_i, 1), np.sum(c1 * c2 * inv_i, 1))
+    top = 0.5 * (q11 + q22) + np.sqrt(0.25 * (q11 - q22) ** 2 + q12 ** 2)
+    return (MOBILITY_MARGIN * (1.0 / mass + normal), MOBILITY_MARGIN * (1.0 / mass + float(top.max())))
+
+
+def _safe_step_ellipsoids(scene, family, axes, mass, moments, mat, index, walls) -> float:
+    """The safe critical time step of a packing of ellipsoids [time]: :func:`demflow.integrate.safe_time_step`'s
+    Gershgorin bound, each ellipsoid a rigid body:
+
+    - mobility: a unit force at a surface point moves it by 1/m + (r × u)ᵀ I⁻¹ (r × u) at most
+      (:func:`surface_mobility`: along the normal, whose line misses the centre of a non-sphere, and along a
+      tangent), which takes the place of 1/m and 1/m + R²/I of a sphere;
+    - stiffness: the Hertz law at the largest expected overlap δ <= max_overlap × c (c the smallest
+      semi-axis) and the largest equivalent radius.  R* = 1/(2√(AB)) (Johnson), and the relative
+      curvature of two convex bodies is the sum of theirs, so by Minkowski's determinant inequality
+      R* <= Rg₁Rg₂/(Rg₁ + Rg₂) with Rg = 1/√K the Gaussian radius of curvature, at most ab/c on an ellipsoid
+      with a >= b >= c (at the ends of its c axis); a plane has Rg = ∞;
+    - contacts: at most the kissing bound of :func:`demflow.integrate.kissing_number_3d` for the bounding
+      sphere (radius a) and spheres of the thinnest semi-axis in the scene (an assumption, not a theorem
+      for ellipsoids: measured safe in ``tests/test_ellipsoid_time_step.py``), at most every other
+      ellipsoid and wall, and at most ``scene.max_contacts``.
+    """
+    from .integrate import kissing_number_3d, safe_time_step
+
+    s = np.sort(axes, axis=1)[:, ::-1]
+    a, c = s[:, 0], s[:, 2]
+    rg = s[:, 0] * s[:, 1] / s[:, 2]
+    mob = {}
+    mu_n, mu_t = np.empty(len(a)), np.empty(len(a))
+    for k in range(len(a)):
+        key = (tuple(axes[k]), float(mass[k]), tuple(moments[k]))
+        if key not in mob:
+            mob[key] = surface_mobility(axes[k], float(mass[k]), moments[k])
+        mu_n[k], mu_t[k] = mob[key]
+    # safe_time_step takes the normal mobility as 1/mass and the tangential one as 1/mass + r²/inertia
+    extra = mu_t - mu_n
+    inertia = np.where(extra > 0.0, a ** 2 / np.where(extra > 0.0, extra, 1.0), np.inf)
+    used = sorted({int(k) for k in mat})
+    name = {v: k for k, v in index.items()}
+    big = {k: (float(rg[mat == k].max()), float(mass[mat == k].max())) for k in used}
+
+    def constants(law, ka, kb, wall=False):
+        if isinstance(family, HertzMindlin):
+            r_b, m_b = (math.inf, math.inf) if wall else big[kb]
+            f = family.time_step_law(law, name[ka], kb if wall else name[kb], float(scene.max_overlap), r_b, m_b)
+            return lambda sel: f(rg[sel], mass[sel], c[sel])
+        return family.time_step_constants(law)
+
+    pair_laws = {}
+    for (ma, mb), law in family.laws_by_pair.items():
+        if ma in index and mb in index and index[ma] in used and index[mb] in used:
+            pair_laws[(index[ma], index[mb])] = constants(law, index[ma], index[mb])
+            pair_laws[(index[mb], index[ma])] = constants(law, index[mb], index[ma])
+    wall_laws = {}
+    for k in used:
+        for w in walls:
+            wall_laws.setdefault(k, []).append(constants(scene.law_for(name[k], w.material), k, w.material, True))
+    partners = np.full(len(a), len(a) - 1 + len(walls), np.float64)
+    if scene.max_contacts is not None:
+        partners = np.minimum(partners, scene.max_contacts)
+    c_min = float(c.min())
+    return float(safe_time_step(a, 1.0 / mu_n, inertia, mat, pair_laws, wall_laws,
+                                kissing=lambda R, _r: kissing_number_3d(R, c_min), partners=partners)["dt"])
 
 
 def contact_pass(sim: SimulationEllipsoids, recording: bool = False):

@@ -187,10 +187,10 @@ class Scene3D:
          Hertz: the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766))
     allow_unsafe_dt : accept a dt above the safe critical estimate of a packing
         (:func:`demflow.integrate.safe_time_step_3d`: every sphere with as many contacts as can touch it,
-        rotations coupled by the tangential springs, dashpots; Hertzian stiffness at ``max_overlap``) with an
-        UnsafeTimeStepWarning (``allow_supercritical`` accepts any dt, silently)
+        rotations coupled by the tangential springs, dashpots; Hertzian stiffness at ``max_overlap``;
+        ellipsoids: :func:`demflow.ellipsoids3d._safe_step_ellipsoids`) with an UnsafeTimeStepWarning (``allow_supercritical`` accepts any dt, silently)
     max_overlap : the largest overlap the scene's contacts are expected to reach, as a fraction of the
-        smaller radius; the safe estimate of a Hertzian scene takes the stiffness there (k ∝ √δ); a
+        smaller radius (ellipsoids: of the smaller smallest semi-axis); the safe estimate of a Hertzian scene takes the stiffness there (k ∝ √δ); a
         run whose overlaps exceed it is outside what the estimate covers (0 < max_overlap <= 0.5)
     max_contacts : the most contacts a sphere of this scene can have, when its geometry says so (a column
         or a chain: 2); None: as many as can touch it (:func:`demflow.integrate.kissing_number_3d`)

@@ -402,10 +402,12 @@ class HertzMindlin(LawFamily):
         zn, zt = zeta_for(law.restitution, law.damping), zeta_for(et, law.damping)
         sticks = law.friction > 0.0 and law.tangential != "none"
 
-        def constants(R, m):
+        def constants(R, m, depth=None):
+            """``depth``: the length the overlap is a fraction of (default R; an ellipsoid: its smallest
+            semi-axis, R being its largest radius of curvature)."""
             rstar = R if math.isinf(r_b) else R * r_b / (R + r_b)
             mstar = m if math.isinf(m_b) else m * m_b / (m + m_b)
-            root = np.sqrt(rstar * max_overlap * R)
+            root = np.sqrt(rstar * max_overlap * (R if depth is None else depth))
             kn = 2.0 * E * root
             kt = 8.0 * G * root if sticks else np.zeros_like(R)
             return kn, kt, 2.0 * zn * np.sqrt(kn * mstar), 2.0 * zt * np.sqrt(kt * mstar)
