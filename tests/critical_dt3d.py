@@ -35,3 +35,21 @@ def is_unstable(dt: float, n_steps: int = 3000, **kw) -> bool:
 
 def measured_critical_dt(lo: float, hi: float, rel: float = 5e-3, **kw) -> float:
     return bisect_stable(lambda dt: is_unstable(dt, **kw), lo, hi, rel)
+
+
+def assert_refused_above_the_estimate(make, dt: float, words=()) -> None:
+    """``build(make(dt=dt))`` refuses with the usual message (the field, the estimate, the fix, and ``words``);
+    with allow_unsafe_dt it warns, with allow_supercritical it is silent."""
+    import pytest
+
+    from demflow import SceneError, UnsafeTimeStepWarning
+
+    with pytest.raises(SceneError) as e:
+        build(make(dt=dt))
+    for w in ("scene.dt=", "safe critical time step", "give dt <=", "allow_unsafe_dt", "max_overlap", *words):
+        assert w in str(e.value), str(e.value)
+    with pytest.warns(UnsafeTimeStepWarning, match="allow_unsafe_dt=True"):
+        build(make(dt=dt, allow_unsafe_dt=True))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        build(make(dt=dt, allow_supercritical=True))

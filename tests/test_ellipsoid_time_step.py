@@ -12,15 +12,14 @@ meet the planes.
 Measured (2026-11-25): limit 3.81 × the estimate elastic, 9.0 × with restitution 0.5 dashpots, 2.25 × with
 the lattice's 6 contacts declared (max_contacts=6; the estimate otherwise counts the kissing bound, 47 here).
 """
-import math
 import warnings
 
 import numpy as np
 import pytest
 
 from critical_dt import bisect_stable, grows
-from demflow import (Box, Ellipsoids, HertzMindlinLaw, Material, Outputs3D, Plane, Scene3D, SceneError, Spheres,
-                     UnsafeTimeStepWarning, build)
+from critical_dt3d import assert_refused_above_the_estimate
+from demflow import Box, Ellipsoids, HertzMindlinLaw, Material, Outputs3D, Plane, Scene3D, Spheres, build
 
 AXES = (0.03, 0.02, 0.012)
 E, NU, RHO = 7e10, 0.2, 2650.0
@@ -102,16 +101,7 @@ def test_equal_axes_give_about_the_sphere_estimate():
 
 
 def test_build_refuses_above_the_estimate_with_the_fix():
-    dt = 1.5 * estimate()
-    with pytest.raises(SceneError) as e:
-        build(lattice(dt=dt))
-    for w in ("scene.dt=", "safe critical time step", "ellipsoids", "give dt <=", "allow_unsafe_dt", "max_overlap"):
-        assert w in str(e.value), str(e.value)
-    with pytest.warns(UnsafeTimeStepWarning, match="allow_unsafe_dt=True"):
-        build(lattice(dt=dt, allow_unsafe_dt=True))
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        build(lattice(dt=dt, allow_supercritical=True))
+    assert_refused_above_the_estimate(lattice, 1.5 * estimate(), ("ellipsoids",))
 
 
 def test_flatter_ellipsoids_and_deeper_overlaps_need_smaller_steps():

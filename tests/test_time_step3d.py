@@ -14,7 +14,7 @@ import pytest
 import critical_dt3d as cd
 import demflow as df
 from demflow import (HertzMindlinLaw, LinearLaw, Material, Outputs3D, Scene3D, SceneError, Spheres,
-                     UnsafeTimeStepWarning, build)
+                     build)
 
 
 def _estimate(**kw):
@@ -49,15 +49,7 @@ def test_build_refuses_above_the_estimate_with_the_fix():
     sim = build(_column())
     dt = 1.5 * sim.dt_safe
     assert dt < sim.dt_crit  # between the estimates: only the safe one refuses
-    with pytest.raises(SceneError) as e:
-        build(_column(dt=dt))
-    for w in ("scene.dt=", "safe critical time step", "give dt <=", "allow_unsafe_dt", "max_overlap"):
-        assert w in str(e.value), str(e.value)
-    with pytest.warns(UnsafeTimeStepWarning, match="allow_unsafe_dt=True"):
-        build(_column(dt=dt, allow_unsafe_dt=True))
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        build(_column(dt=dt, allow_supercritical=True))
+    cd.assert_refused_above_the_estimate(_column, dt)
 
 
 def test_max_contacts_bounds_the_neighbours():
