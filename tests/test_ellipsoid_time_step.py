@@ -109,3 +109,18 @@ def test_flatter_ellipsoids_and_deeper_overlaps_need_smaller_steps():
     a, b = estimate(overlap=0.01), estimate(overlap=0.16)
     assert a / b == pytest.approx(2.0, rel=0.05)
     assert estimate(max_contacts=6) > estimate()
+
+
+def test_above_the_measured_limit_a_run_is_stopped_not_silent():
+    """The stability matrix's rule for ellipsoids: stepped at 1.05 × and 1.2 × the lattice's measured limit
+    (build told to accept it), the run is stopped by BlowUpError (the energy balance: the overlaps stay
+    small); at 0.9 × it runs 3000 steps without error."""
+    from demflow import BlowUpError
+
+    measured = bisect_stable(unstable, estimate(), 16.0 * estimate(), 2e-2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        build(lattice(dt=0.9 * measured, allow_supercritical=True)).run(3000)
+        for f in (1.05, 1.2):
+            with pytest.raises(BlowUpError, match="energy balance"):
+                build(lattice(dt=f * measured, allow_supercritical=True)).run(3000)
