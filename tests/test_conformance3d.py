@@ -23,6 +23,7 @@ import pytest
 
 import reference_contact as rc
 from helpers import json_leaves
+from test_golden import BLAS_HINT
 from demflow import Ellipsoids, GlobalDamping, LinearLaw, PlateServo, SceneError, build
 from demflow.cases.conformance_3d import (CASE, CONFORMANCE, LIFT_STEP, PARAMS, VARIANTS, conformance_tolerance,
                                          engine_for, scene)
@@ -115,7 +116,7 @@ class TestConformance3D:
         sc = scene(v, PARAMS)
         written = engine_for(engine, v).write_deck(sc, build(sc), tmp_path)
         for p in written:
-            assert p.read_bytes() == (path / p.name).read_bytes(), p.name
+            assert p.read_bytes() == (path / p.name).read_bytes(), f"{p.name}; {BLAS_HINT}"
 
 
 # ------------------------------------------------------------------------------ named differences

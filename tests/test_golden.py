@@ -32,6 +32,15 @@ def _bits(a: np.ndarray) -> np.ndarray:
     return a
 
 
+# The stored bits were recorded where OpenBLAS runs its SkylakeX kernels (an Intel AVX-512 host).  Some results
+# go through BLAS (the restitution dashpot ratio ζ, a brentq root of a solve_ivp impact whose steps use np.dot;
+# the BEM's dense solves), and another kernel rounds differently in the last bits (ζ(0.5): 0.23303370856755498
+# with the Haswell kernels an AMD EPYC host gets, ...53708 with SkylakeX; measured 2026-11-25), which a chaotic
+# run then grows.  On a host with AVX-512, OPENBLAS_CORETYPE=SkylakeX reproduces them.
+BLAS_HINT = ("if this host's CPU differs from the recording host's, set OPENBLAS_CORETYPE=SkylakeX (where the CPU "
+             "has AVX-512): the bits depend on OpenBLAS's kernels (tests/test_golden.py, BLAS_HINT)")
+
+
 def assert_same_bits(name: str, got: dict, want) -> None:
     keys = sorted(k for k in want.files if k != "commit")
     missing = sorted(set(keys) - set(got))
@@ -51,7 +60,8 @@ def assert_same_bits(name: str, got: dict, want) -> None:
         if not np.all(same):
             i = int(np.flatnonzero(~same.reshape(-1))[0])
             raise AssertionError(f"{name} {k}: {int((~same).sum())} entries differ from the golden file, "
-                                 f"first at flat index {i}: {a.reshape(-1)[i]!r} != {b.reshape(-1)[i]!r}")
+                                 f"first at flat index {i}: {a.reshape(-1)[i]!r} != {b.reshape(-1)[i]!r}; "
+                                 + BLAS_HINT)
 
 
 @pytest.mark.parametrize("name, threads", [("box", 1), ("box", 2), ("nine_disc", 1), ("saturated", 1)])
