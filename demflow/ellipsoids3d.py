@@ -46,6 +46,11 @@ class SimulationEllipsoids(Simulation3D):
                                     self.planes, self.tris, self.loading, self.law_params, self.g, self.damping,
                                     self.dt, rec, rec_count, self.work)
 
+    def deepest_overlap_now(self) -> float:
+        """As :meth:`Simulation3D.deepest_overlap_now`, over the smaller of the pair's smallest semi-axes: the
+        length ``scene.max_overlap`` is a fraction of for ellipsoids (:func:`_safe_step_ellipsoids`)."""
+        return self._deepest_relative_to(self.ell.amin)
+
     def tables(self, include_records: bool = True) -> dict:
         """As :meth:`Simulation3D.tables`; the ``spheres`` table (also under ``ellipsoids``) carries
         the bodies' orientations and the semi-axes a1, a2, a3 (``r`` is the bounding radius)."""

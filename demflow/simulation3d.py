@@ -218,10 +218,14 @@ class Simulation3D:
     def deepest_overlap_now(self) -> float:
         """The largest overlap of a listed pair at the last force evaluation, as a fraction of the smaller
         radius (a wall's: the sphere's; a gap is negative); 0 when nothing is listed."""
+        return self._deepest_relative_to(self.spheres.r)
+
+    def _deepest_relative_to(self, r: np.ndarray) -> float:
+        """The largest listed overlap over the smaller of the pair's lengths ``r`` (a wall's: the particle's)."""
         pr = self.pairs
         if pr.ovl.size == 0:
             return 0.0
-        n, r = self.n, self.spheres.r
+        n = self.n
         rmin = np.where(pr.j < n, np.minimum(r[pr.i], r[np.minimum(pr.j, n - 1)]), r[pr.i])
         return float(np.max(pr.ovl / rmin))
 

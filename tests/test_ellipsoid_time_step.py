@@ -124,3 +124,11 @@ def test_above_the_measured_limit_a_run_is_stopped_not_silent():
         for f in (1.05, 1.2):
             with pytest.raises(BlowUpError, match="energy balance"):
                 build(lattice(dt=f * measured, allow_supercritical=True)).run(3000)
+
+
+def test_deepest_overlap_is_a_fraction_of_the_smallest_semi_axis():
+    """The lattice's contacts are pre-compressed to 1 % of c; the run reports that depth relative to c
+    (the length max_overlap refers to for ellipsoids), not to the bounding radius a = 2.5 c."""
+    sim = build(lattice(dt=0.5 * estimate()))
+    sim.run(10)
+    assert sim.deepest_overlap_now() == pytest.approx(0.01, rel=0.05)
