@@ -298,3 +298,19 @@ def test_validate_keeps_going_past_a_broken_case_and_keeps_entries_stored_meanwh
     assert s["cases"]["thesis-five-discs"]["passed"] is True
     assert s["cases"]["thesis-impact"]["title"] == "stored meanwhile"
     assert "boom" in (out / "thesis-one-disc" / "index.html").read_text()
+
+
+def test_validate_removes_a_figure_an_earlier_run_of_the_case_left(tmp_path):
+    """A case's folder holds what its page shows: a file left by an earlier run that this run neither wrote
+    nor lists is deleted; the figures this run wrote stay."""
+    from demflow.report import run_validation
+
+    out = tmp_path / "v"
+    first = run_validation(["ch3-impulse-chain"], str(out))["cases"]["ch3-impulse-chain"]["figures"]
+    assert first, "the case writes figures"
+    stale = out / "ch3-impulse-chain" / "figure_of_an_old_version.png"
+    stale.write_bytes(b"old")
+    again = run_validation(["ch3-impulse-chain"], str(out))["cases"]["ch3-impulse-chain"]["figures"]
+    assert not stale.exists()
+    assert all((out / "ch3-impulse-chain" / f).exists() for f in again)
+    assert (out / "ch3-impulse-chain" / "index.html").exists()

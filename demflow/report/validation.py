@@ -114,7 +114,9 @@ def _run_case(case, p, casedir: Path) -> dict:
     wall = time.perf_counter() - t0
     checks = case.checks(run, p)
     casedir.mkdir(parents=True, exist_ok=True)
+    before = {f.name: f.stat().st_mtime_ns for f in casedir.iterdir() if f.is_file()}
     figs = [Path(f).name for f in case.figures(run, p, str(casedir))]
+    _remove_stale(casedir, before, keep={"index.html", *figs})
     tables = [dict(title=t, html=df.to_html(float_format=lambda v: f"{v:.4g}", border=0))
               for t, df in case.tables(run, p)]
     physics = {v: describe(r.meta["physics"]) for v, r in run.results.items()
@@ -127,6 +129,14 @@ def _run_case(case, p, casedir: Path) -> dict:
                 checks=[dict(name=c.name, value=c.value, reference=c.reference, error=c.error,
                              tolerance=c.tolerance, passed=c.passed, source=c.source, why=c.why,
                              relative=c.relative, kind=c.kind) for c in checks])
+
+
+def _remove_stale(casedir: Path, before: dict, keep: set) -> None:
+    """Delete the files an earlier run of the case left in ``casedir`` that this run neither wrote nor
+    lists (a figure the page no longer has), so the folder holds what the page shows."""
+    for f in casedir.iterdir():
+        if f.is_file() and f.name not in keep and before.get(f.name) == f.stat().st_mtime_ns:
+            f.unlink()
 
 
 def _failed_entry(case, p, err: Exception) -> dict:
