@@ -3,8 +3,8 @@
 lies below the measured limit of a pre-compressed ellipsoid lattice (bisected on Δt here, never reading the
 estimate), and next to the sphere estimate when the axes are equal.
 
-The lattice: one layer of aligned ellipsoids (semi-axes a > b > c along x, y, z) between a floor and a lid,
-periodic along x and y, every contact (tip to tip along x and y, and the c tips on the planes) pre-compressed
+The lattice (demflow.cases.stability_matrix.ellipsoid_lattice, also the stability matrix's ellipsoid row): one
+layer of aligned ellipsoids (semi-axes a > b > c along x, y, z) between a floor and a lid, periodic along x and y, every contact (tip to tip along x and y, and the c tips on the planes) pre-compressed
 to the overlap ``overlap`` × c, so every body is in equilibrium by symmetry; tiny random velocities and spins
 excite every mode.  The stiffest contacts of an ellipsoid are on its flattest face (the c tips), which here
 meet the planes.
@@ -19,31 +19,9 @@ import pytest
 
 from critical_dt import bisect_stable, grows
 from critical_dt3d import assert_refused_above_the_estimate
-from demflow import Box, Ellipsoids, HertzMindlinLaw, Material, Outputs3D, Plane, Scene3D, Spheres, build
-
-AXES = (0.03, 0.02, 0.012)
-E, NU, RHO = 7e10, 0.2, 2650.0
-PERTURBATION = 1e-6  # [length/time]: displacements far below the pre-compression
-
-
-def lattice(dt=None, nx=4, ny=4, overlap=0.01, friction=0.5, restitution=1.0, seed=3, **kw) -> Scene3D:
-    a, b, c = AXES
-    d = overlap * c
-    lx, ly = nx * (2 * a - d), ny * (2 * b - d)
-    g = np.array([((i + 0.5) * lx / nx, (j + 0.5) * ly / ny, 0.0) for j in range(ny) for i in range(nx)])
-    n = len(g)
-    rng = np.random.default_rng(seed)
-    kw.setdefault("max_overlap", overlap)
-    return Scene3D(
-        name="ellipsoid-lattice", spheres=None,
-        ellipsoids=Ellipsoids(axes=[AXES] * n, x=g[:, 0], y=g[:, 1], z=g[:, 2], material="rock",
-                              velocity=PERTURBATION * rng.normal(size=(n, 3)),
-                              angular_velocity=PERTURBATION / c * rng.normal(size=(n, 3))),
-        materials={"rock": Material(density=RHO, young=E, poisson=NU)},
-        laws={("rock", "rock"): HertzMindlinLaw(friction=friction, restitution=restitution)},
-        planes=[Plane("floor", (0.0, 0.0, -(c - d)), (0.0, 0.0, 1.0), "rock"),
-                Plane("lid", (0.0, 0.0, c - d), (0.0, 0.0, -1.0), "rock")],
-        box=Box(periodic_x=(0.0, lx), periodic_y=(0.0, ly)), dt=dt, outputs=Outputs3D(every=0), **kw)
+from demflow import Ellipsoids, HertzMindlinLaw, Material, Outputs3D, Plane, Scene3D, Spheres, build
+from demflow.cases.stability_matrix import ELL_CRITICAL, FCC_E as E, FCC_NU as NU, FCC_RHO as RHO
+from demflow.cases.stability_matrix import ellipsoid_lattice as lattice
 
 
 def kinetic(sim) -> float:
@@ -82,6 +60,8 @@ def test_estimate_is_below_the_measured_limit(kw):
         assert hi < 64 * est, "no instability within 64 × the estimate: the lattice does not probe the limit"
     measured = bisect_stable(lambda dt: unstable(dt, **kw), hi / 2.0 if hi > est else est / 2.0, hi, 2e-2)
     assert est <= measured, (est, measured)
+    if not kw:  # the stability matrix's ellipsoid cells take the limit as ELL_CRITICAL × the estimate
+        assert measured / est == pytest.approx(ELL_CRITICAL, rel=2e-2), measured / est
     print(f"ellipsoid lattice {kw}: estimate {est:.4g}, measured limit {measured:.4g} = {measured / est:.2f} ×")
 
 

@@ -26,12 +26,12 @@ def test_row(row, tmp_path, monkeypatch):
 
 def test_every_row_of_the_issue_is_in_the_matrix():
     assert set(ROWS) == {"time step", "stiffness ratio", "radius ratio", "friction", "BEM gap", "viscosity",
-                         "energy drift", "3D time step", "3D friction"}
+                         "energy drift", "3D time step", "3D friction", "ellipsoid time step"}
     # every row has a stable cell, and the rows with a limit have a clear-error cell too
     for row in ROWS:
         kinds = {c.expect for c in cells(DRIFT_STEPS) if c.row == row}
         assert "stable" in kinds, row
-    for row in ("time step", "BEM gap", "viscosity", "3D time step"):
+    for row in ("time step", "BEM gap", "viscosity", "3D time step", "ellipsoid time step"):
         assert {"refused", "stopped"} <= {c.expect for c in cells(DRIFT_STEPS) if c.row == row}, row
 
 
