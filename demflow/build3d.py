@@ -217,6 +217,34 @@ def particle_materials(scene, field: str, one: str, material, n: int) -> list[st
     return mats
 
 
+def time_step_laws(scene, family, mats, mat, index, walls, size, m_dash, call) -> tuple[dict, dict]:
+    """The laws of the safe critical time step (:func:`demflow.integrate.safe_time_step`'s ``disc_laws`` and
+    ``wall_laws``) for the particle materials ``mats`` (names; ``mat`` their indices): the constants of a linear
+    law, or for a Hertzian law a function of a particle mask, ``call(f, sel)`` applying
+    :meth:`demflow.laws.hertz_mindlin.HertzMindlin.time_step_law`'s ``f`` to the masked particles, against
+    partners of the largest ``size`` and dashpot mass ``m_dash`` of their material (a wall: infinite)."""
+    used = sorted(set(mats))
+    big = {a: (float(size[mat == index[a]].max()), float(m_dash[mat == index[a]].max())) for a in used}
+
+    def constants(law, a, b, wall=False):
+        if isinstance(family, HertzMindlin):
+            r_b, m_b = (math.inf, math.inf) if wall else big[b]
+            f = family.time_step_law(law, a, b, float(scene.max_overlap), r_b, m_b)
+            return lambda sel: call(f, sel)
+        return family.time_step_constants(law)
+
+    pair_laws = {}
+    for (a, b), law in family.laws_by_pair.items():
+        if a in used and b in used:
+            pair_laws[(index[a], index[b])] = constants(law, a, b)
+            pair_laws[(index[b], index[a])] = constants(law, b, a)
+    wall_laws = {}
+    for a in used:
+        for w in walls:
+            wall_laws.setdefault(index[a], []).append(constants(scene.law_for(a, w.material), a, w.material, True))
+    return pair_laws, wall_laws
+
+
 def _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies) -> float:
     """The packing's safe critical time step (:func:`demflow.integrate.safe_time_step_3d`) [time], for the
     sphere pairs that can meet and every sphere against every wall.  A clump member moves with its clump:
@@ -235,25 +263,8 @@ def _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies) ->
         mass[members] = 1.0 / (1.0 / bodies.mass[b] + rho ** 2 / bodies.moments[b].min(axis=1))
         inertia[members] = np.inf
 
-    used = sorted(set(mats))
-    big = {a: (float(r[mat == index[a]].max()), float(m_dash[mat == index[a]].max())) for a in used}
-
-    def constants(law, a, b, wall=False):
-        if isinstance(family, HertzMindlin):
-            r_b, m_b = (math.inf, math.inf) if wall else big[b]
-            f = family.time_step_law(law, a, b, float(scene.max_overlap), r_b, m_b)
-            return lambda sel: f(r[sel], m_dash[sel])
-        return family.time_step_constants(law)
-
-    pair_laws = {}
-    for (a, b), law in family.laws_by_pair.items():
-        if a in used and b in used:
-            pair_laws[(index[a], index[b])] = constants(law, a, b)
-            pair_laws[(index[b], index[a])] = constants(law, b, a)
-    wall_laws = {}
-    for a in used:
-        for w in walls:
-            wall_laws.setdefault(index[a], []).append(constants(scene.law_for(a, w.material), a, w.material, True))
+    pair_laws, wall_laws = time_step_laws(scene, family, mats, mat, index, walls, r, m_dash,
+                                          lambda f, sel: f(r[sel], m_dash[sel]))
     # the spheres and walls each can meet: every sphere but itself and its own clump's members
     own = np.ones(len(r))
     if np.any(members):

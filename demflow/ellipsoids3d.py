@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from .build3d import (_array, _check_safe_step, _common_length, _law_family, _skin_and_box, _walls,
-                      particle_materials, quat_to_matrix, rayleigh_time_step)
+                      particle_materials, quat_to_matrix, rayleigh_time_step, time_step_laws)
 from .contacts.ellipsoids import WARM_COLUMNS
 from .laws.hertz_mindlin import HertzMindlin
 from .scene import SceneError
@@ -146,7 +146,7 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
             raise SceneError(f"scene.dt={dt:.6g} exceeds the critical estimate {dt_crit:.6g} ({how}); give a "
                              "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
                              "allow_supercritical=True")
-    dt_safe = _safe_step_ellipsoids(scene, family, axes, mass, moments, mat, index, walls)
+    dt_safe = _safe_step_ellipsoids(scene, family, axes, mass, moments, mats, mat, index, walls)
     _check_safe_step(scene, dt, dt_safe, ELLIPSOIDS_ESTIMATE)
     P = np.zeros((n, 16))
     sp = Spheres3(pos=pos, vel=vel, angvel=w, quat=q.copy(), r=r, mass=mass, inertia=moments.mean(axis=1),
@@ -201,7 +201,7 @@ def surface_mobility(axes, mass: float, moments) -> tuple[float, float]:
     return (MOBILITY_MARGIN * (1.0 / mass + normal), MOBILITY_MARGIN * (1.0 / mass + float(top.max())))
 
 
-def _safe_step_ellipsoids(scene, family, axes, mass, moments, mat, index, walls) -> float:
+def _safe_step_ellipsoids(scene, family, axes, mass, moments, mats, mat, index, walls) -> float:
     """The safe critical time step of a packing of ellipsoids [time]: :func:`demflow.integrate.safe_time_step`'s
     Gershgorin bound, each ellipsoid a rigid body:
 
@@ -233,26 +233,8 @@ def _safe_step_ellipsoids(scene, family, axes, mass, moments, mat, index, walls)
     # safe_time_step takes the normal mobility as 1/mass and the tangential one as 1/mass + r²/inertia
     extra = mu_t - mu_n
     inertia = np.where(extra > 0.0, a ** 2 / np.where(extra > 0.0, extra, 1.0), np.inf)
-    used = sorted({int(k) for k in mat})
-    name = {v: k for k, v in index.items()}
-    big = {k: (float(rg[mat == k].max()), float(mass[mat == k].max())) for k in used}
-
-    def constants(law, ka, kb, wall=False):
-        if isinstance(family, HertzMindlin):
-            r_b, m_b = (math.inf, math.inf) if wall else big[kb]
-            f = family.time_step_law(law, name[ka], kb if wall else name[kb], float(scene.max_overlap), r_b, m_b)
-            return lambda sel: f(rg[sel], mass[sel], c[sel])
-        return family.time_step_constants(law)
-
-    pair_laws = {}
-    for (ma, mb), law in family.laws_by_pair.items():
-        if ma in index and mb in index and index[ma] in used and index[mb] in used:
-            pair_laws[(index[ma], index[mb])] = constants(law, index[ma], index[mb])
-            pair_laws[(index[mb], index[ma])] = constants(law, index[mb], index[ma])
-    wall_laws = {}
-    for k in used:
-        for w in walls:
-            wall_laws.setdefault(k, []).append(constants(scene.law_for(name[k], w.material), k, w.material, True))
+    pair_laws, wall_laws = time_step_laws(scene, family, mats, mat, index, walls, rg, mass,
+                                          lambda f, sel: f(rg[sel], mass[sel], c[sel]))
     partners = np.full(len(a), len(a) - 1 + len(walls), np.float64)
     if scene.max_contacts is not None:
         partners = np.minimum(partners, scene.max_contacts)
