@@ -154,7 +154,13 @@ TOLERANCES = {
     "hertz.restitution": Tolerance(
         1e-2,
         "Acceptance of issue 13: the rebound restitution within 1 % of the target e in the matching convention "
-        "(demflow's 'exact' ζ(e) solves the scaled damped-Hertz impact with scipy to 1e-10).", kind="exact"),
+        "(demflow's 'exact' ζ(e) solves the scaled damped-Hertz impact to ~1e-11, tolerance 'hertz.impact-integrator').",
+        kind="exact"),
+    "hertz.impact-integrator": Tolerance(
+        1e-10,
+        "demflow.laws.restitution's BLAS-free Dormand-Prince integration of the scaled impact (rtol 1e-13) against "
+        "scipy's DOP853 at rtol 1e-13: the rebound e.  DOP853 itself moves by 3.5e-12 between rtol 1e-12 and 1e-13 "
+        "(measured at ζ = 0.233, 2026-11-25); 1e-10 is ~30x that.", absolute=True, kind="exact"),
     "hertz.oblique-sliding": Tolerance(
         1e-2,
         "Issue 13 asks the rebound curves within the restitution's 1 %. In gross sliding (tan θ > 7μ(1+e)/2 for a "

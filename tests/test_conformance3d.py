@@ -23,7 +23,6 @@ import pytest
 
 import reference_contact as rc
 from helpers import json_leaves
-from test_golden import BLAS_HINT
 from demflow import Ellipsoids, GlobalDamping, LinearLaw, PlateServo, SceneError, build
 from demflow.cases.conformance_3d import (CASE, CONFORMANCE, LIFT_STEP, PARAMS, VARIANTS, conformance_tolerance,
                                          engine_for, scene)
@@ -116,7 +115,8 @@ class TestConformance3D:
         sc = scene(v, PARAMS)
         written = engine_for(engine, v).write_deck(sc, build(sc), tmp_path)
         for p in written:
-            assert p.read_bytes() == (path / p.name).read_bytes(), f"{p.name}; {BLAS_HINT}"
+            assert p.read_bytes() == (path / p.name).read_bytes(), (f"{p.name} differs from the deck the stored run used: if the change is meant, "
+                                                               f"regenerate it (demflow reference {CASE} --engine {engine})")
 
 
 # ------------------------------------------------------------------------------ named differences

@@ -32,13 +32,12 @@ def _bits(a: np.ndarray) -> np.ndarray:
     return a
 
 
-# The stored bits were recorded where OpenBLAS runs its SkylakeX kernels (an Intel AVX-512 host).  Some results
-# go through BLAS (the restitution dashpot ratio ζ, a brentq root of a solve_ivp impact whose steps use np.dot;
-# the BEM's dense solves), and another kernel rounds differently in the last bits (ζ(0.5): 0.23303370856755498
-# with the Haswell kernels an AMD EPYC host gets, ...53708 with SkylakeX; measured 2026-11-25), which a chaotic
-# run then grows.  On a host with AVX-512, OPENBLAS_CORETYPE=SkylakeX reproduces them.
-BLAS_HINT = ("if this host's CPU differs from the recording host's, set OPENBLAS_CORETYPE=SkylakeX (where the CPU "
-             "has AVX-512): the bits depend on OpenBLAS's kernels (tests/test_golden.py, BLAS_HINT)")
+# Results that go through LAPACK (the BEM's dense LU: the saturated scene) depend in their last bits on the
+# kernels OpenBLAS picks for the CPU; those scenes run in a process with the kernels pinned
+# (golden_scenes.PINNED_BLAS).  Nothing else in demflow's results goes through BLAS (ζ(e) was made BLAS-free
+# on 2026-11-25, tests/test_spheres3d.py); a difference here is a change of the code.
+BLAS_HINT = ("scenes through LAPACK run with OpenBLAS's kernels pinned (tests/golden_scenes.py, PINNED_BLAS); "
+             "elsewhere a difference is a change of the code")
 
 
 def assert_same_bits(name: str, got: dict, want) -> None:
@@ -65,10 +64,17 @@ def assert_same_bits(name: str, got: dict, want) -> None:
 
 
 @pytest.mark.parametrize("name, threads", [("box", 1), ("box", 2), ("nine_disc", 1), ("saturated", 1)])
-def test_golden_bits(name, threads):
-    sim, res = gs.run(name, threads=threads)
+def test_golden_bits(name, threads, tmp_path):
+    if name in gs.BLAS_SCENES:
+        if not gs.cpu_runs_pinned_blas():
+            pytest.skip(f"{name} is checked with OpenBLAS's Haswell kernels, which this CPU cannot run (no AVX2/FMA)")
+        gs.run_pinned(name, tmp_path / "got.npz")
+        with np.load(tmp_path / "got.npz", allow_pickle=False) as f:
+            got = {k: f[k] for k in f.files}
+    else:
+        got = gs.state_arrays(*gs.run(name, threads=threads))
     with np.load(gs.GOLDEN / f"{name}.npz", allow_pickle=False) as want:
-        assert_same_bits(f"{name}@{threads}", gs.state_arrays(sim, res), want)
+        assert_same_bits(f"{name}@{threads}", got, want)
 
 
 def test_golden_detects_a_change():

@@ -3,6 +3,10 @@ against brute force, invariances, energy, determinism, checkpoints and clear err
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -86,6 +90,49 @@ def test_restitution_conventions():
     assert abs(hertz_restitution(zeta_linear(0.3)) - 0.3) > 0.01
     with pytest.raises(ValueError, match="e=1.5"):
         zeta_exact(1.5)
+
+
+def _solve_ivp_restitution(zeta, rtol):
+    """The same impact by scipy's DOP853 (the reference the BLAS-free integrator replaced)."""
+    from scipy.integrate import solve_ivp
+    b = 2.0 * zeta * np.sqrt(1.5)
+
+    def rhs(_t, y):
+        xi = max(y[0], 0.0)
+        return (y[1], -max(xi ** 1.5 + b * xi ** 0.25 * y[1], 0.0))
+
+    def released(_t, y):
+        xi = max(y[0], 0.0)
+        return xi ** 1.5 + b * xi ** 0.25 * y[1] if y[1] < 0 else 1.0
+    released.terminal = True
+    released.direction = -1
+    sol = solve_ivp(rhs, (0.0, 20.0), (0.0, 1.0), events=released, rtol=rtol, atol=1e-14, method="DOP853")
+    return float(-sol.y_events[0][0][1])
+
+
+@pytest.mark.parametrize("zeta", [0.0003, 0.015, 0.233, 1.13, 4.39])
+def test_hertz_restitution_agrees_with_solve_ivp(zeta):
+    t = tol("hertz.impact-integrator").value
+    want = _solve_ivp_restitution(zeta, 1e-13)
+    assert hertz_restitution(zeta) == pytest.approx(want, abs=t)
+    # negative control: the same integrator at rtol 1e-6 misses by more than the tolerance (2e-9 to 3e-7)
+    assert abs(hertz_restitution(zeta, rtol=1e-6) - want) > t
+
+
+def test_zeta_does_not_depend_on_the_blas_kernels():
+    """ζ enters every 3D run and the engine decks: its bits must be the same on every host.  Computed
+    here under two OpenBLAS kernel sets (what an Intel AVX-512 host and an AMD host pick); before the
+    integrator was made BLAS-free, ζ(0.5) was ...53708 with one and ...55498 with the other."""
+    flags = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
+    cores = ["Haswell"] if " avx2" in flags else []
+    cores += ["SkylakeX"] if " avx512f" in flags else []
+    if len(cores) < 2:
+        pytest.skip("needs a CPU that runs both OpenBLAS's Haswell and SkylakeX kernels (AVX2 and AVX-512)")
+    code = ("from demflow.laws.restitution import zeta_exact as z; "
+            "print([z(e).hex() for e in (0.1, 0.5, 0.9)])")
+    got = {c: subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                             env={**os.environ, "OPENBLAS_CORETYPE": c}).stdout for c in cores}
+    assert got["Haswell"] == got["SkylakeX"], got
 
 
 # ---------------------------------------------------------------------------- neighbour list
