@@ -15,7 +15,7 @@ from collections import namedtuple
 import numpy as np
 from numba.extending import overload
 
-from ..jit import njit
+from ..jit import njit, njit_inline
 from .base import (LawFamily, is_params_of, law_energy3, law_energy_add, law_force, law_force3, law_force_dissipation,
                    law_separate)
 
@@ -164,44 +164,51 @@ def _linear_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz
         return None
 
     def impl(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
-        kn = law.kn[ma, mb]
-        if law.normal_mode == NORMAL_INCREMENTAL:
-            N = hist[k, 3] + kn * vn * dt
-        else:
-            N = kn * overlap
-        if N < 0.0:
-            N = 0.0
-        hist[k, 3] = N
-        Fn = N + law.cn[ma, mb] * vn
-        if Fn < 0.0:
-            Fn = 0.0
-        diss = (Fn - N) * vn * dt  # the normal dashpot (what the no-tension cut leaves of it)
-        if not law.has_shear:
-            return Fn, 0.0, 0.0, 0.0, False, diss
-        ks = law.ks[ma, mb]
-        Sx = hist[k, 0] - ks * vtx * dt
-        Sy = hist[k, 1] - ks * vty * dt
-        Sz = hist[k, 2] - ks * vtz * dt
-        cs = law.cs[ma, mb]
-        smax = law.mu[ma, mb] * (Fn if law.sliding_mode == SLIDING_CS else N) + law.coh[ma, mb]
-        s2 = Sx * Sx + Sy * Sy + Sz * Sz
-        sliding = s2 > smax * smax
-        if sliding:
-            sm = math.sqrt(s2)
-            f = smax / sm
-            Sx *= f
-            Sy *= f
-            Sz *= f
-            cs = 0.0  # no shear dashpot while sliding
-            if ks > 0.0:  # Coulomb slip: (|S_trial| - S_max)/k_S at S_max
-                diss += smax * (sm - smax) / ks
-        else:
-            diss += cs * (vtx * vtx + vty * vty + vtz * vtz) * dt
-        hist[k, 0] = Sx
-        hist[k, 1] = Sy
-        hist[k, 2] = Sz
-        return Fn, Sx - cs * vtx, Sy - cs * vty, Sz - cs * vtz, sliding, diss
+        return linear_contact3(law.kn[ma, mb], law.ks[ma, mb], law.cn[ma, mb], law.cs[ma, mb], law.mu[ma, mb],
+                               law.coh[ma, mb], law.normal_mode, law.sliding_mode, law.has_shear, hist, k, overlap,
+                               vn, vtx, vty, vtz, dt)
     return impl
+
+
+@njit_inline
+def linear_contact3(kn, ks, cn, cs, mu, coh, normal_mode, sliding_mode, has_shear, hist, k, overlap, vn, vtx, vty,
+                    vtz, dt):
+    """The linear law's force on 3D contact k from the pair's scalar parameters (law_force3's contract;
+    scalars for the reason given in :func:`demflow.laws.hertz_mindlin.hertz_contact3`)."""
+    if normal_mode == NORMAL_INCREMENTAL:
+        N = hist[k, 3] + kn * vn * dt
+    else:
+        N = kn * overlap
+    if N < 0.0:
+        N = 0.0
+    hist[k, 3] = N
+    Fn = N + cn * vn
+    if Fn < 0.0:
+        Fn = 0.0
+    diss = (Fn - N) * vn * dt  # the normal dashpot (what the no-tension cut leaves of it)
+    if not has_shear:
+        return Fn, 0.0, 0.0, 0.0, False, diss
+    Sx = hist[k, 0] - ks * vtx * dt
+    Sy = hist[k, 1] - ks * vty * dt
+    Sz = hist[k, 2] - ks * vtz * dt
+    smax = mu * (Fn if sliding_mode == SLIDING_CS else N) + coh
+    s2 = Sx * Sx + Sy * Sy + Sz * Sz
+    sliding = s2 > smax * smax
+    if sliding:
+        sm = math.sqrt(s2)
+        f = smax / sm
+        Sx *= f
+        Sy *= f
+        Sz *= f
+        cs = 0.0  # no shear dashpot while sliding
+        if ks > 0.0:  # Coulomb slip: (|S_trial| - S_max)/k_S at S_max
+            diss += smax * (sm - smax) / ks
+    else:
+        diss += cs * (vtx * vtx + vty * vty + vtz * vtz) * dt
+    hist[k, 0] = Sx
+    hist[k, 1] = Sy
+    hist[k, 2] = Sz
+    return Fn, Sx - cs * vtx, Sy - cs * vty, Sz - cs * vtz, sliding, diss
 
 
 @overload(law_energy3, inline="always")
