@@ -491,7 +491,10 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             if d2 >= rs * rs:
                 if pairs.ovl[k] >= 0.0:  # touching last step (or listed anew): clear it once
                     _apart(pairs, k, -1.0)
-                pairs.ovl[k] = rs - math.sqrt(d2) if recording else -1.0
+                if recording:
+                    pairs.ovl[k] = rs - math.sqrt(d2)
+                elif pairs.ovl[k] != -1.0:  # written once, not every step (0.13 ms a step on 35 000 such pairs)
+                    pairs.ovl[k] = -1.0
                 continue
             dist = math.sqrt(d2)
             overlap = rs - dist
