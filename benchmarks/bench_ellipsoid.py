@@ -15,8 +15,8 @@ Per pair: one force pass (sphere_forces / ellipsoid_forces) over the listed pair
 packing, timed over ``--passes`` passes; reported per touching pair and per listed pair.  Also the
 geometry alone: the Lin & Ng solve (two potential points, cold and warm-started) of a touching pair
 against the sphere pair's distance/normal, in a compiled loop over the touching pairs.  Per
-particle-step: ``--rounds`` rounds of ``--steps`` steps; the best round with the spread.  The machine
-is shared (other jobs run): the spread says how much; results go to
+particle-step: ``--rounds`` rounds of ``--steps`` steps; the best round with the spread.  Say with
+``--notes`` whether anything else ran (the spread shows how much it mattered); results go to
 benchmarks/results/ellipsoid_cost.{json,md}.
 """
 from __future__ import annotations
@@ -166,6 +166,7 @@ def main():
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--passes", type=int, default=20)
     ap.add_argument("--tag", default="ellipsoid_cost")
+    ap.add_argument("--notes", default="", help="the machine's state during the run (say whether anything else ran)")
     a = ap.parse_args()
     numba.set_num_threads(1)
     base = dense_fcc(a.n)
@@ -189,7 +190,7 @@ def main():
     meta = {"date": time.strftime("%Y-%m-%d %H:%M"), "machine": platform.processor() or platform.machine(),
             "python": platform.python_version(), "numba": numba.__version__, "threads": 1, "n": a.n,
             "steps": a.steps, "rounds": a.rounds, "passes": a.passes,
-            "note": "shared machine (2 cores, other engineers' jobs running): compare ratios, mind the spread"}
+            "note": a.notes or "machine state not recorded: compare ratios, mind the spread"}
     (out / f"{a.tag}.json").write_text(json.dumps({"meta": meta, "rows": rows, "geometry": geo}, indent=1))
     s0 = rows["spheres"]
     lines = [f"# Ellipsoid vs sphere contact cost, one thread ({meta['date']})", "",
