@@ -25,6 +25,7 @@ from .tradeoff_cases import FallingDiscTradeoff, MiyataUniaxialTradeoff, Photoel
 from .ch3_chain import ImpulseChain
 from .miyata_uniaxial3d import MiyataUniaxial3D, MiyataUniaxial3DEllipsoids, MiyataUniaxial3DFull
 from .miyata_uniaxial2d import MiyataUniaxial2D
+from .miyata_ksweep import MiyataUniaxialKSweep
 from .stability_matrix import StabilityMatrix
 
 CASES: dict[str, Case] = {c.name: c for c in (OneDisc(), FiveDiscs(), Impact(), NineDisc(), NineDiscEngines(), Photoelastic(),
@@ -40,6 +41,7 @@ CASES[ImpulseChain.name] = ImpulseChain()
 CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
 CASES[MiyataUniaxial3DEllipsoids.name] = MiyataUniaxial3DEllipsoids()
 CASES[MiyataUniaxial3DFull.name] = MiyataUniaxial3DFull()
+CASES[MiyataUniaxialKSweep.name] = MiyataUniaxialKSweep()
 CASES[MiyataUniaxial2D.name] = MiyataUniaxial2D()
 CASES[Conformance3D.name] = Conformance3D()
 CASES[ImpactTradeoff.name] = ImpactTradeoff()

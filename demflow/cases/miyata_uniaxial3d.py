@@ -237,6 +237,14 @@ def wall_contact_points(sim, wall: int, box: float) -> np.ndarray:
 STRESS_LEVELS_KPA = (100, 200, 300, 400, 500, 600)  # the curve sampled at fixed stresses (every run reaches them)
 
 
+def _equal_forces(f) -> bool:
+    """Whether the q-model sees these forces as all equal (its N infinite): fit_q_model's own criterion,
+    ln<f> - <ln f> <= 0, over the positive forces."""
+    f = np.asarray(f, float)
+    f = f[f > 0]
+    return bool(f.size and (np.ptp(f) == 0.0 or math.log(float(np.mean(f))) - float(np.mean(np.log(f))) <= 0.0))
+
+
 def run_statistics(u) -> dict:
     """The statistics one run (:class:`demflow.engines.uniaxial3d.UniaxialRun`, any engine) is judged on:
     particles left after trimming, the bed's top before loading, the settlement [mm] where the plate stress
@@ -262,8 +270,9 @@ def run_statistics(u) -> dict:
         fs = [f for f in u.snapshot_forces(wall) if f.size]
         out[f"particles on the {wall} (mean of snapshots)"] = float(np.mean([f.size for f in fs])) if fs else math.nan
         f = pooled_f(u, wall)
-        # the fit needs 3 forces; one particle per snapshot gives f = 1 every time: N infinite
-        out[f"q-model N, {wall}"] = (math.nan if f.size < 3 else math.inf if np.ptp(f) == 0.0
+        # the fit needs 3 forces; one particle per snapshot gives f = 1 every time, and forces equal to round-off
+        # give ln<f> - <ln f> <= 0 in floating point (the fit's own test): N infinite either way
+        out[f"q-model N, {wall}"] = (math.nan if f.size < 3 else math.inf if _equal_forces(f)
                                      else float(fit_q_model(f).N))
     return out
 
