@@ -166,3 +166,47 @@ def test_a_clump_comes_to_rest_on_a_plane_and_members_never_touch_each_other():
     assert not np.any((sim.pairs.j < sim.n) & (sim.spheres.body[sim.pairs.i] == sim.spheres.body[np.minimum(sim.pairs.j, sim.n - 1)]))
     assert rec.kinetic_translation.iloc[-1] + rec.kinetic_rotation.iloc[-1] < 1e-9 * 5.0 * 9.81 * 0.1
     assert sim.planes.force[0, 2] == pytest.approx(-5.0 * 9.81, rel=1e-4)  # the floor carries the weight
+
+
+def test_principal_axes_by_jacobi_match_lapack():
+    """symmetric_eigen3 (the clump's principal frame without BLAS) against numpy's eigh on random symmetric
+    matrices, and exact on diagonal and isotropic ones (a one-sphere clump)."""
+    from demflow.shapes.clump import symmetric_eigen3
+    from demflow.tolerances import tol
+
+    t = tol("clump.principal-axes").value
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        B = rng.normal(size=(3, 3)) * rng.uniform(1e-3, 1e3)
+        A = B + B.T
+        w, v = symmetric_eigen3(A)
+        w_ref = np.linalg.eigh(A)[0]
+        scale = np.max(np.abs(w_ref))
+        assert np.max(np.abs(w - w_ref)) <= t * scale
+        assert np.max(np.abs(A @ v - v * w)) <= t * scale
+        assert np.max(np.abs(v.T @ v - np.eye(3))) <= t
+    w, v = symmetric_eigen3(np.diag([3.0, 1.0, 2.0]))
+    assert w.tolist() == [1.0, 2.0, 3.0] and np.array_equal(np.abs(v), np.eye(3)[:, [1, 2, 0]])
+    w, v = symmetric_eigen3(2.0 * np.eye(3))
+    assert w.tolist() == [2.0, 2.0, 2.0] and np.array_equal(v, np.eye(3))
+
+
+def test_clump_templates_do_not_depend_on_the_blas_kernels():
+    """A clump's principal frame enters every clump run: the same bits under OpenBLAS's Haswell and SkylakeX
+    kernels (with LAPACK's eigh and a matrix product the K = 8 template differed in the last bits)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    flags = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
+    if not (" avx2" in flags and " avx512f" in flags):
+        pytest.skip("needs a CPU that runs both OpenBLAS's Haswell and SkylakeX kernels (AVX2 and AVX-512)")
+    code = ("import hashlib, numpy as np; from demflow.shapes.clump import ClumpTemplate; h = hashlib.sha256()\n"
+            "for K in (1, 3, 8, 12, 24):\n"
+            "    T = ClumpTemplate.ellipsoid_like(K)\n"
+            "    h.update(T.centres.tobytes() + T.moments.tobytes() + np.float64(T.mass).tobytes())\n"
+            "print(h.hexdigest())")
+    got = {c: subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                             env={**os.environ, "OPENBLAS_CORETYPE": c}).stdout for c in ("Haswell", "SkylakeX")}
+    assert got["Haswell"] == got["SkylakeX"], got

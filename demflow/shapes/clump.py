@@ -190,6 +190,50 @@ def union_mass_properties(centres, radii, density: float = 1.0, h: float | None 
     return {"volume": V, "mass": mass, "com": com, "inertia": inertia}
 
 
+def symmetric_eigen3(A) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues (ascending) and unit eigenvectors (columns) of a symmetric 3 × 3 matrix, by cyclic Jacobi
+    rotations (Golub & Van Loan, Matrix Computations §8.5) in scalar arithmetic.
+
+    Not ``np.linalg.eigh``: LAPACK's eigenvectors go through BLAS, whose kernels (chosen for the CPU) round
+    differently, so a clump's principal frame, hence every clump run, differed in the last bits between hosts
+    (measured 2026-11-25: the K = 8 template's axes between OpenBLAS's Haswell and SkylakeX kernels).  A
+    rotation is skipped once its off-diagonal entry is below the round-off of both diagonal ones."""
+    a = [[float(A[i][j]) for j in range(3)] for i in range(3)]
+    v = [[1.0 if i == j else 0.0 for j in range(3)] for i in range(3)]
+    for _ in range(50):
+        if a[0][1] == 0.0 and a[0][2] == 0.0 and a[1][2] == 0.0:
+            break
+        for p, q in ((0, 1), (0, 2), (1, 2)):
+            apq = a[p][q]
+            if apq == 0.0:
+                continue
+            g = 100.0 * abs(apq)
+            if abs(a[p][p]) + g == abs(a[p][p]) and abs(a[q][q]) + g == abs(a[q][q]):
+                a[p][q] = a[q][p] = 0.0  # below the diagonal's round-off
+                continue
+            theta = (a[q][q] - a[p][p]) / (2.0 * apq)
+            t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
+            c = 1.0 / math.sqrt(t * t + 1.0)
+            s_ = t * c
+            for k in range(3):  # A <- A J (columns p, q)
+                akp, akq = a[k][p], a[k][q]
+                a[k][p] = c * akp - s_ * akq
+                a[k][q] = s_ * akp + c * akq
+            for k in range(3):  # A <- J^T A (rows p, q)
+                apk, aqk = a[p][k], a[q][k]
+                a[p][k] = c * apk - s_ * aqk
+                a[q][k] = s_ * apk + c * aqk
+            a[p][q] = a[q][p] = 0.0
+            for k in range(3):  # V <- V J
+                vkp, vkq = v[k][p], v[k][q]
+                v[k][p] = c * vkp - s_ * vkq
+                v[k][q] = s_ * vkp + c * vkq
+    order = sorted(range(3), key=lambda i: a[i][i])
+    w = np.array([a[i][i] for i in order])
+    vecs = np.array([[v[k][i] for i in order] for k in range(3)])
+    return w, vecs
+
+
 @dataclass(frozen=True)
 class ClumpTemplate:
     """A clump in its principal frame: member centres (K, 3) [length] and radii (K,), mass [mass] and
@@ -208,10 +252,14 @@ class ClumpTemplate:
             raise ValueError("give the clump's mass or its density, one of them")
         props = union_mass_properties(centres, radii, 1.0, h)
         rho = density if density is not None else mass / props["volume"]
-        w, vecs = np.linalg.eigh(props["inertia"] * rho)
+        w, vecs = symmetric_eigen3(props["inertia"] * rho)
         if np.linalg.det(vecs) < 0:
             vecs[:, 2] *= -1.0
-        local = (np.asarray(centres, np.float64).reshape(-1, 3) - props["com"]) @ vecs
+        # the centres in the principal frame, d·v_k summed in a fixed order: a matrix product goes through BLAS,
+        # whose kernels (chosen for the CPU) round the last bit differently (measured 2026-11-25: 1 ulp in the
+        # K = 8 template between OpenBLAS's Haswell and SkylakeX kernels), and every clump run would inherit it
+        d = np.asarray(centres, np.float64).reshape(-1, 3) - props["com"]
+        local = d[:, 0:1] * vecs[0] + d[:, 1:2] * vecs[1] + d[:, 2:3] * vecs[2]
         return cls(centres=local, radii=np.asarray(radii, np.float64).reshape(-1), mass=rho * props["volume"],
                    moments=w)
 
