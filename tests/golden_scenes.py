@@ -109,19 +109,19 @@ PINNED_BLAS = {"OPENBLAS_CORETYPE": "Haswell"}
 
 
 def cpu_runs_pinned_blas() -> bool:
-    """Whether this CPU runs OpenBLAS's Haswell kernels (x86-64 with AVX2 and FMA)."""
-    info = Path("/proc/cpuinfo")
-    flags = info.read_text() if info.exists() else ""
-    return " avx2" in flags and " fma" in flags
+    """Whether this CPU runs the pinned kernels (OpenBLAS's Haswell: x86-64 with AVX2 and FMA)."""
+    from blas_kernels import can_run
+
+    return can_run(PINNED_BLAS["OPENBLAS_CORETYPE"])
 
 
 def run_pinned(name: str, out: Path) -> None:
     """Run golden scene ``name`` in a fresh process with :data:`PINNED_BLAS`; its arrays go to ``out``."""
-    import os
+    from blas_kernels import run_under
+
     code = (f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import golden_scenes as gs, numpy as np; "
             f"sim, res = gs.run({name!r}); np.savez(sys.argv[1], **gs.state_arrays(sim, res))")
-    done = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True, text=True,
-                          env={**os.environ, **PINNED_BLAS}, timeout=900)
+    done = run_under(PINNED_BLAS["OPENBLAS_CORETYPE"], ["-c", code, str(out)], timeout=900)
     if done.returncode != 0:
         raise RuntimeError(f"golden scene {name} with {PINNED_BLAS}: {done.stderr[-3000:]}")
 

@@ -194,19 +194,11 @@ def test_principal_axes_by_jacobi_match_lapack():
 def test_clump_templates_do_not_depend_on_the_blas_kernels():
     """A clump's principal frame enters every clump run: the same bits under OpenBLAS's Haswell and SkylakeX
     kernels (with LAPACK's eigh and a matrix product the K = 8 template differed in the last bits)."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
+    from blas_kernels import assert_same_output_under_both_kernel_sets
 
-    flags = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
-    if not (" avx2" in flags and " avx512f" in flags):
-        pytest.skip("needs a CPU that runs both OpenBLAS's Haswell and SkylakeX kernels (AVX2 and AVX-512)")
-    code = ("import hashlib, numpy as np; from demflow.shapes.clump import ClumpTemplate; h = hashlib.sha256()\n"
-            "for K in (1, 3, 8, 12, 24):\n"
-            "    T = ClumpTemplate.ellipsoid_like(K)\n"
-            "    h.update(T.centres.tobytes() + T.moments.tobytes() + np.float64(T.mass).tobytes())\n"
-            "print(h.hexdigest())")
-    got = {c: subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                             env={**os.environ, "OPENBLAS_CORETYPE": c}).stdout for c in ("Haswell", "SkylakeX")}
-    assert got["Haswell"] == got["SkylakeX"], got
+    assert_same_output_under_both_kernel_sets(
+        "import hashlib, numpy as np; from demflow.shapes.clump import ClumpTemplate; h = hashlib.sha256()\n"
+        "for K in (1, 3, 8, 12, 24):\n"
+        "    T = ClumpTemplate.ellipsoid_like(K)\n"
+        "    h.update(T.centres.tobytes() + T.moments.tobytes() + np.float64(T.mass).tobytes())\n"
+        "print(h.hexdigest())")

@@ -145,8 +145,9 @@ def test_validate_check_values_unchanged(tmp_path):
     (timings excluded).  The values were recorded where OpenBLAS runs its SkylakeX kernels, and the BEM
     cases' go through LAPACK (tests/golden_scenes.py): validate runs in a process with those kernels pinned,
     which needs a CPU with AVX-512."""
-    flags = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
-    if " avx512f" not in flags:
+    from blas_kernels import can_run, run_under
+
+    if not can_run("SkylakeX"):
         pytest.skip("the values were recorded with OpenBLAS's SkylakeX kernels, which need AVX-512")
     golden = json.loads((gs.GOLDEN / "validate_checks.json").read_text())["cases"]
     code = textwrap.dedent("""
@@ -157,8 +158,7 @@ def test_validate_check_values_unchanged(tmp_path):
                   open(sys.argv[3], "w"))
     """)
     out = tmp_path / "values.json"
-    done = subprocess.run([sys.executable, "-c", code, json.dumps(sorted(golden)), str(tmp_path / "validation"),
-                           str(out)], capture_output=True, text=True, env=dict(os.environ, OPENBLAS_CORETYPE="SkylakeX"))
+    done = run_under("SkylakeX", ["-c", code, json.dumps(sorted(golden)), str(tmp_path / "validation"), str(out)])
     assert done.returncode == 0, done.stderr[-3000:]
     values_now = json.loads(out.read_text())
     diffs = []

@@ -3,10 +3,6 @@ against brute force, invariances, energy, determinism, checkpoints and clear err
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -123,16 +119,10 @@ def test_zeta_does_not_depend_on_the_blas_kernels():
     """ζ enters every 3D run and the engine decks: its bits must be the same on every host.  Computed
     here under two OpenBLAS kernel sets (what an Intel AVX-512 host and an AMD host pick); before the
     integrator was made BLAS-free, ζ(0.5) was ...53708 with one and ...55498 with the other."""
-    flags = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
-    cores = ["Haswell"] if " avx2" in flags else []
-    cores += ["SkylakeX"] if " avx512f" in flags else []
-    if len(cores) < 2:
-        pytest.skip("needs a CPU that runs both OpenBLAS's Haswell and SkylakeX kernels (AVX2 and AVX-512)")
-    code = ("from demflow.laws.restitution import zeta_exact as z; "
-            "print([z(e).hex() for e in (0.1, 0.5, 0.9)])")
-    got = {c: subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                             env={**os.environ, "OPENBLAS_CORETYPE": c}).stdout for c in cores}
-    assert got["Haswell"] == got["SkylakeX"], got
+    from blas_kernels import assert_same_output_under_both_kernel_sets
+
+    assert_same_output_under_both_kernel_sets("from demflow.laws.restitution import zeta_exact as z; "
+                                              "print([z(e).hex() for e in (0.1, 0.5, 0.9)])")
 
 
 # ---------------------------------------------------------------------------- neighbour list

@@ -201,6 +201,7 @@ class MiyataUniaxialKSweep(Case):
         ex = run.extras
         table, cost = ex["table"], ex["cost"]
         keys = list(next(iter(table.values())))
+        front = pareto_front(_points(table, cost))
         rows = []
         for label, r in table.items():
             k, d = largest_relative_difference(r) if label != "ellipsoids" else ("—", 0.0)
@@ -209,7 +210,7 @@ class MiyataUniaxialKSweep(Case):
                          "largest relative difference (key statistics)": d, "which": k,
                          "indistinguishable (every key p ≥ %.2g)" % ALPHA: (indistinguishable(r)
                                                                              if label != "ellipsoids" else "—"),
-                         "on the Pareto front": label in pareto_front(_points(table, cost))})
+                         "on the Pareto front": label in front})
         out = [("Cost and difference from the ellipsoid bed (seed means, %d seeds)" % len(ex["seeds"]),
                 pd.DataFrame(rows))]
         means = pd.DataFrame({label: {k: f"{r[k]['mean']:.4g} ± {r[k]['sd']:.2g}" for k in keys}

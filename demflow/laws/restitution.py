@@ -67,8 +67,8 @@ def zeta_yade(e: float) -> float:
     return math.sqrt(1.0 / (1.0 - (1.0 + e) ** 2 * math.exp(a)) - 1.0)
 
 
-# Dormand & Prince (1980) RK5(4)7M: nodes, stage weights, 5th-order solution, 5th - 4th order error weights
-_DP_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+# Dormand & Prince (1980) RK5(4)7M: stage weights, 5th-order solution, 5th - 4th order error weights (the
+# nodes are not needed: the scaled impact does not depend on time)
 _DP_A = np.array([
     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
     [1 / 5, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -91,10 +91,9 @@ def _impact_force(xi, v, b):
 
 
 @njit
-def _dp_step(xi, v, h, b, out):
-    """One Dormand-Prince step of ξ'' = -max(0, force) from (ξ, ξ'); out = (ξ, ξ', err ξ, err ξ')."""
-    kx = np.zeros(7)
-    kv = np.zeros(7)
+def _dp_step(xi, v, h, b, out, kx, kv):
+    """One Dormand-Prince step of ξ'' = -max(0, force) from (ξ, ξ'); out = (ξ, ξ', err ξ, err ξ').
+    kx, kv (7,): the stages' scratch, allocated once by the caller."""
     for s in range(7):
         x, w = xi, v
         for j in range(s):
@@ -120,8 +119,10 @@ def _impact_rebound(b, rtol):
     a full step from the last accepted state.  Returns NaN when no end of contact is found."""
     xi, v, t, h = 0.0, 1.0, 0.0, 1e-6
     out = np.zeros(4)
+    kx = np.zeros(7)
+    kv = np.zeros(7)
     for _ in range(1_000_000):
-        _dp_step(xi, v, h, b, out)
+        _dp_step(xi, v, h, b, out, kx, kv)
         err = max(abs(out[2]) / (rtol * max(abs(xi), abs(out[0])) + 1e-15),
                   abs(out[3]) / (rtol * max(abs(v), abs(out[1])) + 1e-15))
         if err > 1.0:
@@ -134,12 +135,12 @@ def _impact_rebound(b, rtol):
                 mid = 0.5 * (lo + hi)
                 if mid <= lo or mid >= hi:
                     break
-                _dp_step(xi, v, mid, b, out)
+                _dp_step(xi, v, mid, b, out, kx, kv)
                 if out[1] < 0.0 and _impact_force(out[0], out[1], b) <= 0.0:
                     hi = mid
                 else:
                     lo = mid
-            _dp_step(xi, v, hi, b, out)
+            _dp_step(xi, v, hi, b, out, kx, kv)
             return out[1]
         xi, v, t = x1, v1, t + h
         if t > 20.0:
@@ -155,7 +156,7 @@ def hertz_restitution(zeta: float, rtol: float = 1e-13) -> float:
     scipy's ``solve_ivp``, whose steps go through BLAS: the last bits of ζ then depended on the CPU
     OpenBLAS picks its kernels for (ζ(0.5) differed by 1.8e-14 between AVX-512 Intel and AMD hosts,
     measured 2026-11-25), and ζ enters the engine decks and every 3D run.  Agreement with solve_ivp
-    (DOP853, rtol 1e-11) is a test."""
+    (DOP853, rtol 1e-13) within tolerance ``hertz.impact-integrator`` is a test (tests/test_spheres3d.py)."""
     if zeta < 0 or not math.isfinite(zeta):
         raise ValueError(f"zeta={zeta!r}: give a finite damping ratio >= 0")
     if zeta == 0.0:
