@@ -2,6 +2,8 @@
 page, the deck writers refuse what an engine cannot express, and the decks of the stored reference
 runs are written byte for byte as stored (no engine needed)."""
 import dataclasses
+import json
+import math
 import html
 
 import numpy as np
@@ -13,7 +15,7 @@ from demflow.cases.cs_nine_disc_engines import CASE, engine_scene
 from demflow.engines import EngineUnsupported, LiggghtsEngine, YadeEngine, reference
 from demflow.engines.capabilities import CANNOT, ENGINE_NAMES, FEATURES, MATCHING, VERDICTS, feature
 from demflow.engines.equivalence import as_html
-from demflow.scene import Fluid
+from demflow.scene import Box, Fluid
 
 P = NineDisc().merged()
 ENGINES = {"yade": YadeEngine, "liggghts": LiggghtsEngine}
@@ -58,6 +60,7 @@ USING = {  # feature key -> a nine-disc scene that uses it (starting from the en
     "servo-walls": _servo,
     "pore-fluid": lambda sc: dataclasses.replace(sc, fluid=Fluid(viscosity=1.0)),
     "superquadrics-2d": lambda sc: dataclasses.replace(sc, discs=_superquadrics(sc.discs)),
+    "periodic-y-2d": lambda sc: dataclasses.replace(sc, box=Box(periodic_y=(-1000.0, 1000.0))),
 }
 REFUSED = [(f.key, e) for f in FEATURES for e in ENGINES if f.uses and f.expression(e).verdict in (CANNOT, MATCHING)]
 
@@ -86,14 +89,20 @@ def test_global_damping_expressed_by_yade_refused_by_liggghts(tmp_path):
         LiggghtsEngine().write_deck(sc, sim, tmp_path / "liggghts")
 
 
-def test_unexpressible_pair_values_name_the_feature_and_the_fix(tmp_path):
+def test_pair_values_beyond_the_series_rule_are_set_per_contact(tmp_path):
+    """A disc-wall friction above the disc-disc one (YADE takes the smaller angle of two materials): the deck gives
+    the disc-wall contacts the pair's values itself (capabilities row pair-stiffness); a disc-disc pair stays on
+    the material rule."""
     sc = engine_scene("undamped", P)
     laws = dict(sc.laws)
     (dd, dw) = sorted(laws, key=lambda k: k[0] == k[1])[::-1][:2]  # a disc-disc and a disc-wall pair
     laws[dw] = dataclasses.replace(laws[dw], friction=2.0 * laws[dd].friction + 0.1)
     sc = dataclasses.replace(sc, laws=laws)
-    with pytest.raises(EngineUnsupported, match="pair-friction.*run LIGGGHTS"):
-        YadeEngine().write_deck(sc, build(sc), tmp_path)
+    YadeEngine().write_deck(sc, build(sc), tmp_path)
+    S = json.loads((tmp_path / "scene.json").read_text())
+    disc, wall = dw if dw[0] == dd[0] else dw[::-1]
+    assert S["wall_phys"][wall][disc]["mu"] == laws[dw].friction
+    assert math.tan(S["yade_materials"][disc]["phi"]) == pytest.approx(laws[dd].friction, rel=1e-15)
 
 
 @pytest.mark.parametrize("variant, engine", [(v, e) for v, es in reference.available(CASE).items() for e in es])

@@ -25,6 +25,7 @@ from .tradeoff_cases import FallingDiscTradeoff, MiyataUniaxialTradeoff, Photoel
 from .ch3_chain import ImpulseChain
 from .miyata_uniaxial3d import MiyataUniaxial3D, MiyataUniaxial3DEllipsoids, MiyataUniaxial3DFull
 from .miyata_uniaxial2d import MiyataUniaxial2D
+from .miyata_uniaxial2d_engines import MiyataUniaxial2DEngines
 from .miyata_ksweep import MiyataUniaxialKSweep
 from .stability_matrix import StabilityMatrix
 
@@ -43,6 +44,7 @@ CASES[MiyataUniaxial3DEllipsoids.name] = MiyataUniaxial3DEllipsoids()
 CASES[MiyataUniaxial3DFull.name] = MiyataUniaxial3DFull()
 CASES[MiyataUniaxialKSweep.name] = MiyataUniaxialKSweep()
 CASES[MiyataUniaxial2D.name] = MiyataUniaxial2D()
+CASES[MiyataUniaxial2DEngines.name] = MiyataUniaxial2DEngines()
 CASES[Conformance3D.name] = Conformance3D()
 CASES[ImpactTradeoff.name] = ImpactTradeoff()
 for _study in (PhotoelasticTradeoff, FallingDiscTradeoff, SimpleShearTradeoff, MiyataUniaxialTradeoff):

@@ -105,7 +105,8 @@ def _laws(mu_particles: float):
             ("rock", "wall"): LinearLaw(kn=KN_WALL, ks=KN_WALL, friction=MU)}
 
 
-def _floor(W: float) -> Wall:
+def floor_wall(W: float) -> Wall:
+    """The floor: a wall along y = 0 longer than the box by 1 m on each side."""
     return Wall("floor", (0.0, 0.0), (1.0, 0.0), -1.0, W + 1.0, "wall")
 
 
@@ -146,7 +147,7 @@ def insertion_scene(shape: str, W: float, seed: int, p) -> Scene:
         row += 1
     th = rng.uniform(0.0, math.pi, len(xs)) if shape == "S" else np.zeros(len(xs))
     mu = p["mu_deposit_circles"] if shape == "C" else MU
-    return _scene(f"miyata-uniaxial-2d-{shape}-deposit", shape, xs, ys, th, W, mu, [_floor(W)])
+    return _scene(f"miyata-uniaxial-2d-{shape}-deposit", shape, xs, ys, th, W, mu, [floor_wall(W)])
 
 
 def settle(sim, p, max_steps: int) -> int:
@@ -209,16 +210,18 @@ def run_sample(bed, sample: str, W: float, p) -> dict:
     shape, rough = sample[0], sample[1] == "R"
     x, y, th = bed
     keep = np.flatnonzero(y <= surface(x, rough))
-    s2 = build(_scene(f"miyata-uniaxial-2d-{sample}-trimmed", shape, x[keep], y[keep], th[keep], W, MU, [_floor(W)]))
+    s2 = build(_scene(f"miyata-uniaxial-2d-{sample}-trimmed", shape, x[keep], y[keep], th[keep], W, MU, [floor_wall(W)]))
     steps2 = settle(s2, p, p["settle_max"])
     n = s2.n
     z_top = top_height(s2) + p["plate_gap"]
     plate = Wall("plate", (0.0, z_top), (1.0, 0.0), -1.0, W + 1.0, "wall",
                  phases=(Phase(cycles=10 ** 9, velocity=(0.0, -p["plate_speed"])),))
     x, y, th = _state(s2)
-    s3 = build(_scene(f"miyata-uniaxial-2d-{sample}-loading", shape, x, y, th, W, MU, [_floor(W), plate]))
+    s3 = build(_scene(f"miyata-uniaxial-2d-{sample}-loading", shape, x, y, th, W, MU, [floor_wall(W), plate]))
     s3.hist = transfer_history(s2.finder, s2.other, s2.hist, s3.finder, s3.other, n + 2)  # assumption 8
     th0 = s3.bodies.th.copy()
+    bd0 = s3.bodies  # the state the loading starts from (what the engine decks of miyata-uniaxial-2d-engines start from)
+    start = {k: getattr(bd0, k).copy() for k in ("x", "y", "th", "vx", "vy", "om", "mass", "inertia")}
     small = min(SHAPES[shape]["a"], SHAPES[shape]["b"])
     formed = {}  # particle → record index at which its current plate contact began
     rows, snaps = [], {}
@@ -271,7 +274,7 @@ def run_sample(bed, sample: str, W: float, p) -> dict:
              "n": bd.n.copy(), "contacts": (current_contacts(s3), s3.contacts())[1], "n_particles": n, "stress": rows[-1]["stress"]}
     return {"curve": curve, "shares": shares, "plate_contacts_final": m, "formed_stress": formed_stress,
             "th0": th0, "snaps": snaps, "final": final, "settle_steps": steps2, "n_particles": n,
-            "plate_start": z_top, "weight": float(s2.bodies.mass.sum()) * G}
+            "plate_start": z_top, "weight": float(s2.bodies.mass.sum()) * G, "start": start}
 
 
 def run_shape(shape: str, W: float, seed: int, p, samples=SAMPLES) -> dict:

@@ -95,6 +95,15 @@ def _superquadrics(scene) -> bool:
     return isinstance(scene.discs, Superquadrics)
 
 
+# Measured 2026-11-25 (tests/test_miyata_uniaxial2d_engines.py checks each against its tolerance)
+MEASURED_2D = {
+    "conformance-2d/yade": 1.9e-14,
+    "conformance-2d/liggghts": 1.5e-14,  # max |Δx|/R over the snapshots, frictionless conformance scene, 3000 steps
+    "lever-arm/conformance-yade": 1.8e-3,  # the same with friction (max |Δx|/R)
+    "lever-arm/conformance-liggghts": 1.8e-3,
+}
+_M2 = MEASURED_2D
+
 FEATURES: tuple[Feature, ...] = (
     Feature("discs-2d", "2D discs", "discs, m = ρπR², I = ½mR²",
             yade=Expression("spheres, blockedDOFs 'zXY', mass and inertia set per body to the disc values", EXACT),
@@ -113,8 +122,10 @@ FEATURES: tuple[Feature, ...] = (
     Feature("pair-stiffness", "stiffness and dashpots per material pair",
             "a table per pair (disc-disc differs from disc-wall)",
             yade=Expression("per material, combined in series k1k2/(k1+k2): demflow writes 2× the disc-disc value "
-                            "and solves the wall material's value from the disc-wall pair", EXACT,
-                            "needs 2 k_dd > k_dw; other values are refused"),
+                            "and solves the wall material's value from the disc-wall pair; where no wall value can "
+                            "(k_dw ≥ 2 k_dd, e.g. Miyata Table 2), the deck creates each disc-wall contact from the "
+                            "wall's geometry before the InteractionLoop and sets its ViscElPhys values to the pair's",
+                            EXACT),
             liggghts=Expression("peratomtypepair tables (discs type 1.., walls after)", EXACT),
             measured="1e-12 (damped nine-disc, YADE)"),
     Feature("dashpots", "dashpots", "absolute cN, cS on half-step velocities (eqs 2.31-2.32)",
@@ -122,8 +133,8 @@ FEATURES: tuple[Feature, ...] = (
             liggghts=Expression("absolute_damping on (else multiplied by m_eff)", EXACT),
             measured="damped nine-disc, YADE: 1e-12"),
     Feature("pair-friction", "friction per pair", "tan φ per pair",
-            yade=Expression("tan(min(φ1, φ2)) of the two materials", EXACT,
-                            "when disc-wall ≤ disc-disc; other values are refused"),
+            yade=Expression("tan(min(φ1, φ2)) of the two materials; a disc-wall value above the disc-disc one is set "
+                            "on each disc-wall contact as it forms (as pair-stiffness)", EXACT),
             liggghts=Expression("coefficientFriction peratomtypepair", EXACT)),
     Feature("sliding-rule", "sliding rule",
             "C&S (default): |S| ≤ μFn + c, Fn with dashpot; shear dashpot off while sliding; thesis variant "
@@ -157,8 +168,41 @@ FEATURES: tuple[Feature, ...] = (
             yade=Expression("no servo in the deck", CANNOT), liggghts=Expression("no servo in the deck", CANNOT),
             uses=_servo, remedy="replace the servo by prescribed Phase motion (e.g. the wall path of a demflow run)"),
     Feature("initial-velocity", "initial velocity", "v(-Δt/2)", yade=Expression("v(-Δt/2)", EXACT),
-            liggghts=Expression("v(0)", DIFFERS, "identical when no force acts at t = 0"),
-            measured="identical when no force acts at t = 0"),
+            liggghts=Expression("v(0): in scenes with gravity the deck gives v(−Δt/2) + a(0)Δt/2 (and ω likewise), "
+                                "a(0) from demflow's forces at t = 0; without gravity v(−Δt/2) (the stored decks)",
+                                EXACT, "with gravity: when no dashpot acts at t = 0 (LIGGGHTS's setup forces see v(0)); "
+                                "without: when no force acts at t = 0"),
+            measured="identical without gravity when no force acts at t = 0; miyata-uniaxial-2d conformance scene "
+                     "(gravity, no contact at t = 0, frictionless): positions to "
+                     f"{_M2['conformance-2d/liggghts']:.1g} R over 3000 steps; with contacts and dashpots at t = 0 the "
+                     "same heap parted by 2.5e-4 R (settling back to 7e-10 R by step 3000), and by 0.76 % in the floor "
+                     "force without the a(0)Δt/2 term"),
+    Feature("gravity-2d", "gravity (2D)", "g on every disc", yade=Expression("NewtonIntegrator gravity", EXACT),
+            liggghts=Expression("fix gravity (the deck had none before 2026-11-25: scenes with gravity ran without "
+                                "it)", EXACT),
+            measured="miyata-uniaxial-2d conformance scene (frictionless): positions to "
+                     f"{_M2['conformance-2d/yade']:.1g} R (YADE), {_M2['conformance-2d/liggghts']:.1g} R (LIGGGHTS)"),
+    Feature("periodic-2d", "periodic box (2D)", "periodic along x, minimum image; walls not repeated",
+            yade=Expression("periodic cell (x: the period; y, z: 1000× the scene), walls as boxes longer than the "
+                            "period (allowBiggerThanPeriod); disc-wall contacts created from the walls' geometry each "
+                            "step (2023.02a's periodic collider misses some)", EXACT, "periodic along x only"),
+            liggghts=Expression("boundary p f p, the wall meshes clipped to the period", EXACT,
+                                "periodic along x only; horizontal walls moving along y only (else refused)"),
+            measured="miyata-uniaxial-2d conformance scene (a disc across the boundary, frictionless): as gravity-2d"),
+    Feature("periodic-y-2d", "periodic along y (2D)", "periodic along y, minimum image",
+            yade=Expression("not written to the 2D deck", CANNOT), liggghts=Expression("not written to the 2D deck", CANNOT),
+            uses=lambda scene: scene.box.periodic_y is not None,
+            remedy="use a box periodic along x only (walls bound y)"),
+    Feature("lever-arm-2d", "where the contact's tangential velocity and moment are taken (2D)",
+            "at the disc radius R (C&S eqs 2.9-2.10, Miyata eqs 38-42: the surface point)",
+            yade=Expression("at the contact point, mid-overlap: R − δ/2 (ViscEl law)", DIFFERS,
+                            "the shear force and moment scale by (R − δ/2)/R"),
+            liggghts=Expression("at the contact point R − δ/2", DIFFERS, "as YADE"),
+            measured="spinning disc on the floor (δ/R = 0.1): YADE's first shear force / demflow's = (R − δ/2)/R to "
+                     "1e-12 (asserted); with friction the conformance scene parts by "
+                     f"{_M2['lever-arm/conformance-yade']:.2g} (YADE) and {_M2['lever-arm/conformance-liggghts']:.2g} "
+                     "(LIGGGHTS) of R in 3000 steps; on miyata-uniaxial-2d-engines (δ/R up to ~0.1) the engines' "
+                     "CS and CR statistics stay inside demflow's 8-seed band"),
     Feature("reported-forces", "reported contact forces", "total Fn, Fs on the finder (dashpots included)",
             yade=Expression("normalForce, shearForce on id2; the reader converts them to force on the finder",
                             DIFFERS, "shearForce excludes the shear dashpot D_S"),

@@ -73,6 +73,31 @@ def _write_data(path: Path, S, tid, nt, lo, hi, zl):
     path.write_text("\n".join(out) + "\n")
 
 
+def half_step_start(sim) -> np.ndarray:
+    """(n, 3): a(0)Δt/2 and α(0)Δt/2 of each disc at the scene's start, from demflow's own forces at t = 0 (contacts
+    and gravity).  demflow holds v(−Δt/2) (central differences), LIGGGHTS takes v(0) (velocity Verlet): the deck
+    gives v(−Δt/2) + a(0)Δt/2, so both reach the same v(Δt/2) (capabilities feature 'initial-velocity').  Zero where
+    nothing acts at t = 0, so such decks are unchanged."""
+    n = sim.n
+    c = sim.contact_table_arrays()
+    i, j, fn, fs = c["finder"], c["other"], c["fn"], c["fs"]
+    fx = -fn * c["nx"] - fs * c["ny"]  # on the finder: -Fn ε - Fs τ, τ = (ε_y, -ε_x)
+    fy = -fn * c["ny"] + fs * c["nx"]
+    F = np.zeros((n, 3))
+    np.add.at(F[:, 0], i, fx)
+    np.add.at(F[:, 1], i, fy)
+    np.add.at(F[:, 2], i, fs * sim.r[i])
+    d = j < n
+    np.add.at(F[:, 0], j[d], -fx[d])
+    np.add.at(F[:, 1], j[d], -fy[d])
+    np.add.at(F[:, 2], j[d], fs[d] * sim.r[j[d]])
+    out = np.zeros((n, 3))
+    out[:, 0] = 0.5 * sim.dt * (F[:, 0] / sim.mass + sim.gx)
+    out[:, 1] = 0.5 * sim.dt * (F[:, 1] / sim.mass + sim.gy)
+    out[:, 2] = 0.5 * sim.dt * F[:, 2] / sim.inertia
+    return out
+
+
 class LiggghtsEngine(Engine):
     name = "liggghts"
     executable = "liggghts"
@@ -90,6 +115,11 @@ class LiggghtsEngine(Engine):
     def write_deck(self, scene, sim, deckdir: Path):
         refuse_inexpressible(self.name, scene)
         S = scene_numbers(scene, sim)
+        if S["gravity"] != [0.0, 0.0]:  # (scenes without gravity keep the decks their stored references hold)
+            half = half_step_start(sim)
+            D = S["discs"]
+            for k, key in enumerate(("vx", "vy", "omega")):
+                D[key] = [v + h if h != 0.0 else v for v, h in zip(D[key], half[:, k].tolist())]
         mats = S["materials"]
         disc_mats = sorted(set(S["discs"]["material"]))
         wall_mats = sorted({w["material"] for w in S["walls"]})
@@ -116,6 +146,15 @@ class LiggghtsEngine(Engine):
                 ys += [w["py"] + h * w["ey"]]
         lo = (min(xs) - pad, min(ys) - pad)
         hi = (max(xs) + pad, max(ys) + pad)
+        px = scene.box.periodic_x
+        if px is not None:  # periodic along x: the box is the period, the walls are clipped to it
+            lo, hi = (float(px[0]), lo[1]), (float(px[1]), hi[1])
+            for w in S["walls"]:
+                if w["ey"] != 0.0 or any(ph["vx"] or ph["omega"] for ph in w["phases"]):
+                    raise EngineUnsupported(
+                        f"wall {w['name']!r} is not horizontal and fixed in x in a box periodic along x; the LIGGGHTS "
+                        "deck clips walls to the period, which only a horizontal wall moving along y survives "
+                        "(capabilities feature 'periodic-2d'); use horizontal walls or an open box")
         zl = 6.0 * rmax
         dt = S["dt"]
         n = S["n_discs"]
@@ -128,7 +167,8 @@ class LiggghtsEngine(Engine):
             zl = max(zl, 0.5 * span)
         L = [
             "# demflow deck for LIGGGHTS-PUBLIC 3.8.0: 2D discs, linear law, walls with prescribed motion",
-            "atom_style granular", "atom_modify map array sort 0 0", "dimension 2", "boundary f f p", "newton off",
+            "atom_style granular", "atom_modify map array sort 0 0", "dimension 2",
+            "boundary p f p" if px is not None else "boundary f f p", "newton off",
             "communicate single vel yes", "units si",
         ]
         if big:  # box, atoms and velocities from a data file: O(N) (create_atoms + set atom is O(N^2))
@@ -157,6 +197,8 @@ class LiggghtsEngine(Engine):
         for k, w in enumerate(S["walls"]):
             ax, ay = w["px"] + w["h1"] * w["ex"], w["py"] + w["h1"] * w["ey"]
             bx, by = w["px"] + w["h2"] * w["ex"], w["py"] + w["h2"] * w["ey"]
+            if px is not None:  # a horizontal wall (checked above), clipped to the period
+                (ax, bx) = (lo[0], hi[0]) if ax < bx else (hi[0], lo[0])
             _stl(deckdir / f"w{k}.stl", ax, ay, bx, by, -zl, zl)
             L.append(f"fix w{k} all mesh/surface/stress file w{k}.stl type {tid[w['material']]} "
                      f"reference_point {_f(w['px'])} {_f(w['py'])} 0.0")
@@ -198,6 +240,10 @@ class LiggghtsEngine(Engine):
                 L.append(f"variable w{k}om equal {'+'.join(om_terms)}")
                 L.append(f"fix w{k}rot all move/mesh mesh w{k} rotate/variable origin {_f(origin[0])} {_f(origin[1])} 0.0 "
                          f"axis 0.0 0.0 1.0 omega v_w{k}om")
+        gx, gy = S["gravity"]
+        g = math.hypot(gx, gy)
+        if g > 0.0:  # (scenes without gravity keep the deck text the stored references hold)
+            L.append(f"fix grav all gravity {_f(g)} vector {_f(gx / g)} {_f(gy / g)} 0.0")
         L += ["fix integr all nve/sphere", "fix e2d all enforce2d"]
         every = int(S["every"])
         if every > 0:  # every = 0: no outputs at all (benchmarks)

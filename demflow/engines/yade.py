@@ -54,6 +54,32 @@ def split_in_series(pairs: dict, disc_mats: list, wall_mats: list, key: str) -> 
     return vals
 
 
+def _materials_in_series(pairs: dict, disc_mats: list, wall_mats: list) -> dict:
+    """Per-material ViscElMat values (kn, ks, cn, cs, friction angle φ) that YADE's rules (values in series,
+    the smaller angle) turn into every pair's law; EngineUnsupported where none do."""
+    ym = {m: {} for m in disc_mats + wall_mats}
+    for key in ("kn", "ks", "cn", "cs"):
+        vals = split_in_series(pairs, disc_mats, wall_mats, key)
+        for m in ym:
+            ym[m][key] = vals[m]
+    # friction: the pair uses the smaller of the two angles.  A material with a law against
+    # itself takes that angle; any other the smallest angle of its pairs (then checked)
+    for m in ym:
+        ym[m]["phi"] = math.atan(pairs[(m, m)]["mu"]) if (m, m) in pairs else math.pi / 2
+    for (a, b), law in pairs.items():
+        phi = math.atan(law["mu"])
+        for m in (a, b):
+            if (m, m) not in pairs:
+                ym[m]["phi"] = min(ym[m]["phi"], phi)
+    for (a, b), law in pairs.items():
+        if not math.isclose(math.tan(min(ym[a]["phi"], ym[b]["phi"])), law["mu"], rel_tol=1e-12, abs_tol=1e-15):
+            raise EngineUnsupported(f"YADE takes the smaller friction angle of two materials; pair ({a}, {b}) "
+                                    f"tan φ = {law['mu']} cannot be expressed with the other pairs "
+                                    f"(capabilities feature 'pair-friction'); make disc-wall friction at most "
+                                    f"the disc-disc friction, or run LIGGGHTS (a table per type pair)")
+    return ym
+
+
 def _partner(v_known, v_pair, key):
     if v_known is None or v_known <= v_pair:
         raise EngineUnsupported(
@@ -85,29 +111,24 @@ class YadeEngine(Engine):
             pairs[(b, a)] = law
         disc_mats = sorted(set(S["discs"]["material"]))
         wall_mats = sorted({w["material"] for w in S["walls"]} - set(disc_mats))
-        ym = {m: {} for m in disc_mats + wall_mats}
-        for key in ("kn", "ks", "cn", "cs"):
-            vals = split_in_series({k: v for k, v in pairs.items()}, disc_mats, wall_mats, key)
-            for m in ym:
-                ym[m][key] = vals[m]
-        # friction: the pair uses the smaller of the two angles.  A material with a law against
-        # itself takes that angle; any other the smallest angle of its pairs (then checked)
-        for m in ym:
-            ym[m]["phi"] = math.atan(pairs[(m, m)]["mu"]) if (m, m) in pairs else math.pi / 2
-        for (a, b), law in pairs.items():
-            phi = math.atan(law["mu"])
-            for m in (a, b):
-                if (m, m) not in pairs:
-                    ym[m]["phi"] = min(ym[m]["phi"], phi)
-        for (a, b), law in pairs.items():
-            if not math.isclose(math.tan(min(ym[a]["phi"], ym[b]["phi"])), law["mu"], rel_tol=1e-12, abs_tol=1e-15):
-                raise EngineUnsupported(f"YADE takes the smaller friction angle of two materials; pair ({a}, {b}) "
-                                        f"tan φ = {law['mu']} cannot be expressed with the other pairs "
-                                        f"(capabilities feature 'pair-friction'); make disc-wall friction at most "
-                                        f"the disc-disc friction, or run LIGGGHTS (a table per type pair)")
+        try:
+            ym = _materials_in_series(pairs, disc_mats, wall_mats)
+        except EngineUnsupported:
+            if not wall_mats:
+                raise
+            # the disc-wall pairs cannot come from YADE's series rule (e.g. a wall stiffer than twice the
+            # disc-disc value, Miyata Table 2): the deck sets each disc-wall interaction's ViscElPhys to the
+            # pair's law itself when the contact forms (capabilities feature 'pair-stiffness')
+            ym = _materials_in_series({k: v for k, v in pairs.items() if k[0] in disc_mats and k[1] in disc_mats},
+                                      disc_mats, [])
+            for w in wall_mats:
+                ym[w] = dict(ym[disc_mats[0]])
+            S["wall_phys"] = {w: {d: pairs[(d, w)] for d in disc_mats if (d, w) in pairs} for w in wall_mats}
         for m in S["materials"]:
             ym.setdefault(m, dict(kn=0.0, ks=0.0, cn=0.0, cs=0.0, phi=0.0))
         S["yade_materials"] = ym
+        if scene.box.periodic_x is not None:
+            S["periodic_x"] = [float(v) for v in scene.box.periodic_x]
         # walls: which side are the discs on? (the box is put on the other side)
         x = np.asarray(S["discs"]["x"])
         y = np.asarray(S["discs"]["y"])
@@ -118,7 +139,10 @@ class YadeEngine(Engine):
         S["wall_thickness"] = float(np.mean(S["discs"]["r"]))
         atomic_json(deckdir / "scene.json", S)
         deck = deckdir / "deck.py"
-        deck.write_text(resources.files("demflow.engines.decks").joinpath("yade_discs2d.py").read_text())
+        # scenes with a periodic box or per-contact wall laws run the program that has them; the others keep the
+        # program their stored references were made with (byte for byte)
+        program = "yade_discs2d_periodic.py" if ("periodic_x" in S or "wall_phys" in S) else "yade_discs2d.py"
+        deck.write_text(resources.files("demflow.engines.decks").joinpath(program).read_text())
         return [deck, deckdir / "scene.json"]
 
     def command(self, deckdir: Path):
