@@ -139,10 +139,7 @@ class YadeEngine(Engine):
         S["wall_thickness"] = float(np.mean(S["discs"]["r"]))
         atomic_json(deckdir / "scene.json", S)
         deck = deckdir / "deck.py"
-        # scenes with a periodic box or per-contact wall laws run the program that has them; the others keep the
-        # program their stored references were made with (byte for byte)
-        program = "yade_discs2d_periodic.py" if ("periodic_x" in S or "wall_phys" in S) else "yade_discs2d.py"
-        deck.write_text(resources.files("demflow.engines.decks").joinpath(program).read_text())
+        deck.write_text(resources.files("demflow.engines.decks").joinpath("yade_discs2d.py").read_text())
         return [deck, deckdir / "scene.json"]
 
     def command(self, deckdir: Path):
