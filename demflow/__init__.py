@@ -3,7 +3,7 @@
 Scene → build → Simulation → results → analysis → report.
 """
 from .scene import (Box, ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene,
-                    SceneError, Servo, Superquadrics, UnsafeTimeStepWarning, EnergyBalanceWarning, Wall)
+                    SceneError, Servo, Superquadrics, UnsafeTimeStepWarning, EnergyBalanceWarning, PeriodicMeshWarning, Wall)
 from .build import build
 from .simulation import BlowUpError, Simulation
 from .results import Results
@@ -14,7 +14,7 @@ from .shapes.clump import ClumpTemplate
 __version__ = "0.1.0"
 
 __all__ = ["Scene", "Box", "Discs", "Wall", "Phase", "Servo", "Material", "LinearLaw", "ContactModel",
-           "GlobalDamping", "Outputs", "SceneError", "UnsafeTimeStepWarning", "EnergyBalanceWarning", "build",
+           "GlobalDamping", "Outputs", "SceneError", "UnsafeTimeStepWarning", "EnergyBalanceWarning", "PeriodicMeshWarning", "build",
            "Simulation", "BlowUpError", "Results",
            "Scene3D", "Spheres", "Plane", "PlanePhase", "PlateServo", "Outputs3D", "HertzMindlinLaw", "TriangleMesh",
            "Clumps", "ClumpTemplate", "Ellipsoids", "Superquadrics"]

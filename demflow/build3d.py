@@ -318,8 +318,33 @@ def _skin_and_box(scene, r):
         if length and length <= 2.0 * reach:
             raise SceneError(f"scene.box.periodic_{axis}: the period {length:.6g} must exceed twice the reach "
                              f"2·r_max + skin = {reach:.6g} (minimum image); widen the box or reduce the skin")
-
+    _warn_periodic_meshes(scene, float(r.max()) + skin)
     return skin, box
+
+
+def _warn_periodic_meshes(scene, reach: float) -> None:
+    """Warn (PeriodicMeshWarning) for each mesh whose vertices, as built, lie within ``reach`` (r_max + skin)
+    of a periodic boundary or beyond it: mesh contacts take no periodic image, so there the contacts are
+    not those of a periodic mesh (measured: an ellipsoid wrapped from a ramp's low end at x = 0 to its high
+    end at x = L started 0.17 of its thinnest semi-axis deep and was launched).  Phases that move a mesh
+    later are not followed."""
+    import warnings
+
+    from .scene import PeriodicMeshWarning
+
+    for mesh in scene.meshes:
+        v = np.asarray(mesh.vertices, float)
+        for axis, a, per in (("x", 0, scene.box.periodic_x), ("y", 1, scene.box.periodic_y)):
+            if per is None or v.size == 0:
+                continue
+            lo, hi = float(per[0]), float(per[1])
+            margin = min(float(v[:, a].min()) - lo, hi - float(v[:, a].max()))
+            if margin < reach:
+                warnings.warn(f"scene {scene.name!r}: mesh {mesh.name!r} comes to {margin:.4g} of the periodic boundary "
+                              f"along {axis} (scene.box.periodic_{axis}={tuple(per)}), less than a particle's reach "
+                              f"r_max + skin = {reach:.4g}; mesh contacts take no periodic image, so a particle wrapped "
+                              "across that boundary meets the mesh's other end. Keep the mesh at least that far inside "
+                              "the period, or use a plane", PeriodicMeshWarning, stacklevel=4)
 
 
 def build3d(scene: Scene3D) -> Simulation3D:

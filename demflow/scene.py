@@ -37,6 +37,12 @@ class UnsafeTimeStepWarning(UserWarning):
     (``allow_supercritical=True``)."""
 
 
+class PeriodicMeshWarning(UserWarning):
+    """A triangle mesh of a 3D scene comes within a particle's reach of a periodic boundary (or crosses it):
+    mesh contacts take no periodic image, so a particle wrapped across that boundary meets the mesh as it lies
+    on the other side, not as its image would."""
+
+
 def check_identifier(kind: str, name: str) -> str:
     """Names (scene, material, wall) are identifiers: letters, digits, '_' and '-'.
 

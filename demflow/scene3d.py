@@ -143,7 +143,8 @@ class TriangleMesh:
     [length], ``triangles`` (nt, 3) vertex indices.  A sphere touches a triangle at the triangle's
     point closest to its centre (face, edge or vertex); an edge or vertex contact counts only when no
     face of the same mesh touches that sphere, and once for triangles sharing it.  ``phases``
-    translate the whole mesh.  Meshes are not imaged across periodic boundaries."""
+    translate the whole mesh.  Meshes are not imaged across periodic boundaries: build warns
+    (``PeriodicMeshWarning``) for a mesh within a particle's reach of one."""
 
     name: str
     vertices: Sequence[Sequence[float]]

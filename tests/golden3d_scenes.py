@@ -60,12 +60,54 @@ def settling_bed():
         allow_unsafe_dt=True)
 
 
-SCENES = {"bed3d": settling_bed}
+def ellipsoid_bed():
+    """40 frictional Hertz ellipsoids (semi-axes 1.3 : 1 : 0.7, random orientations) falling in a box periodic
+    along x and y onto a floor and a tilted triangle-mesh ramp (ellipsoid-plane, -triangle and -ellipsoid
+    contacts, the aspherical body step), local damping.  Added (session 13) before the ellipsoid geometry's
+    helpers were inlined, and written by the code before that change."""
+    rng = np.random.default_rng(11)
+    L = 0.03
+    pos = []
+    while len(pos) < 40:
+        p = np.array([rng.uniform(0, L), rng.uniform(0, L), rng.uniform(0.0095, 0.019)])
+        ok = True
+        for q in pos:
+            d = p - q
+            d[:2] -= L * np.round(d[:2] / L)
+            if np.linalg.norm(d) < 2 * 0.0026 + 1e-4:
+                ok = False
+                break
+        if ok:
+            pos.append(p)
+    pos = np.array(pos)
+    axes = rng.uniform(0.0017, 0.0020, 40)[:, None] * np.array([1.3, 1.0, 0.7])
+    q = rng.normal(size=(40, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    vel = rng.normal(0, 0.02, (40, 3)) - np.array([0.0, 0.0, 0.4])
+    mats = {"grain": df.Material(density=2600.0, young=5e9, poisson=0.3),
+            "steel": df.Material(density=7800.0, young=2e10, poisson=0.3)}
+    law = df.HertzMindlinLaw(friction=0.4, restitution=0.7)
+    return df.Scene3D(
+        name="golden3d-ellipsoids", spheres=None,
+        ellipsoids=df.Ellipsoids(axes=axes, x=pos[:, 0], y=pos[:, 1], z=pos[:, 2], material="grain", orientation=q,
+                                 velocity=vel),
+        materials=mats, laws={("grain", "grain"): law, ("grain", "steel"): law},
+        planes=[df.Plane("floor", (0, 0, 0), (0, 0, 1), "steel")],
+        # the ramp stays a particle's reach away from the periodic boundaries: mesh contacts take no periodic
+        # image (a mesh crossing x = 0 launched an ellipsoid wrapped from its low end to its high end)
+        meshes=[df.TriangleMesh("ramp", [(0.006, 0.006, 0.002), (0.024, 0.006, 0.006), (0.024, 0.024, 0.006),
+                                         (0.006, 0.024, 0.002)], [(0, 1, 2), (0, 2, 3)], "steel")],
+        gravity=(0.0, 0.0, -9.81), local_damping=0.1, box=df.Box(periodic_x=(0.0, L), periodic_y=(0.0, L)),
+        dt=2.5e-7, outputs=df.Outputs3D(every=100, track_spheres=(0, 5), orientation=True))
 
 
-def run(name: str, steps: int = 2500):
+SCENES = {"bed3d": settling_bed, "ell3d": ellipsoid_bed}
+STEPS = {"bed3d": 2500, "ell3d": 160000}  # the ellipsoids fall for 0.02 s before their first contact
+
+
+def run(name: str, steps: int | None = None):
     sim = df.build(SCENES[name]())
-    sim.run(steps)
+    sim.run(STEPS[name] if steps is None else steps)
     out = {k: getattr(sim.spheres, k) for k in STATE}
     out.update({"pair_i": sim.pairs.i, "pair_j": sim.pairs.j, "hist": sim.pairs.hist, "fn": sim.pairs.fn,
                 "plane_point": sim.planes.point, "plane_force": sim.planes.force, "tri_v": sim.tris.v})

@@ -21,3 +21,11 @@ def test_golden3d_bits():
     _, got = g3.run("bed3d")
     with np.load(g3.GOLDEN / "bed3d.npz", allow_pickle=False) as want:
         assert_same_bits("bed3d", got, want)
+
+
+def test_golden3d_ellipsoid_bits():
+    """The ellipsoid cycle (Lin & Ng pairs, ellipsoid-plane and -triangle contacts, the aspherical body step),
+    written before its geometry helpers were inlined (session 13)."""
+    _, got = g3.run("ell3d")
+    with np.load(g3.GOLDEN / "ell3d.npz", allow_pickle=False) as want:
+        assert_same_bits("ell3d", got, want)

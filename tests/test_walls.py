@@ -66,3 +66,24 @@ def test_wall_rotation_about_a_pivot():
     assert sim.wpx[0] == pytest.approx(2.0 * np.cos(a), abs=1e-12)
     assert sim.wpy[0] == pytest.approx(2.0 * np.sin(a), abs=1e-12)
     assert np.arctan2(sim.wey[0], sim.wex[0]) == pytest.approx(a, abs=1e-12)
+
+
+def test_mesh_near_a_periodic_boundary_warns():
+    """Mesh contacts take no periodic image: a mesh within a particle's reach of a periodic boundary is named at
+    build (PeriodicMeshWarning), once per axis; the same kind of ramp kept that far inside the period is not."""
+    import sys
+    import warnings
+    from pathlib import Path
+
+    import demflow as df
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    import golden3d_scenes as g3
+
+    with pytest.warns(df.PeriodicMeshWarning) as got:
+        build(g3.settling_bed())  # its ramp spans the whole period along x and y
+    msgs = [str(w.message) for w in got if issubclass(w.category, df.PeriodicMeshWarning)]
+    assert len(msgs) == 2 and "along x" in msgs[0] and "along y" in msgs[1] and "'ramp'" in msgs[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", df.PeriodicMeshWarning)
+        build(g3.ellipsoid_bed())  # its ramp stays 6 mm inside, more than r_max + skin

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from ..jit import njit
+from ..jit import njit, njit_inline
 from ..laws.base import law_energy3, law_force3
 from ..shapes.ellipsoid import FACE, ellipsoid_pair, ellipsoid_plane, ellipsoid_triangle
 from .spheres import relative_velocity, rotate_history
@@ -247,7 +247,7 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
     return status, energy, iters, diss
 
 
-@njit
+@njit_inline
 def _extent(R, a, dx, dy, dz, dist):
     """Half-width of the ellipsoid along the unit vector d/|d| (its support function):
     √(m_bᵀ A² m_b), m_b = Rᵀ d/|d|."""
@@ -258,7 +258,7 @@ def _extent(R, a, dx, dy, dz, dist):
     return math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
 
 
-@njit
+@njit_inline
 def _clear(pairs, k, ovl, c0):
     """Pair k is not touching: clear the law's history and the outputs (the warm start is kept)."""
     for c in range(c0):

@@ -65,7 +65,7 @@ import math
 
 import numpy as np
 
-from ..jit import njit
+from ..jit import njit, njit_inline
 
 FACE = 0
 EDGE = 1
@@ -86,7 +86,7 @@ def ellipsoid_mass_properties(axes, density: float) -> tuple[float, np.ndarray]:
     return m, m / 5.0 * np.array([a2 * a2 + a3 * a3, a1 * a1 + a3 * a3, a1 * a1 + a2 * a2])
 
 
-@njit
+@njit_inline
 def quat_rotation(q, out):
     """Row-major rotation matrix (9,) of the unit quaternion q = (w, x, y, z): body -> world."""
     w, x, y, z = q[0], q[1], q[2], q[3]
@@ -109,7 +109,7 @@ def rotations(quat, rot):
 
 
 # --------------------------------------------------------------------------- the potential point
-@njit
+@njit_inline
 def _cholesky_solve(H, g, lam, s, w, z):
     """Factor K = H - λI = LLᵀ; s = -K⁻¹g, w = L⁻¹s, z = K⁻¹s.  Returns False when K is not positive
     definite (λ ≥ h_min)."""
@@ -197,7 +197,7 @@ def _secular_fallback(H, g, u):
     return lam
 
 
-@njit
+@njit_inline
 def potential_point(H, g, lam0, warm, u, s, w, z):
     """The global minimiser u (|u| = 1, written into ``u``) of uᵀHu + 2gᵀu, H symmetric positive
     definite (3, 3), g (3,): safeguarded Newton on the secular equation from λ0 (``warm``) or from
@@ -246,7 +246,7 @@ def potential_point(H, g, lam0, warm, u, s, w, z):
     return lam, NEWTON_MAX + 1
 
 
-@njit
+@njit_inline
 def _potential_problem(ci, Ri, ai, cj, Rj, aj, H, g, M):
     """H = MᵀM, g = Mᵀb of the point of i's surface minimising j's potential:
     M = A_j⁻¹ R_jᵀ R_i A_i, b = A_j⁻¹ R_jᵀ (c_i - c_j).  R row-major (9,)."""
@@ -270,7 +270,7 @@ def _potential_problem(ci, Ri, ai, cj, Rj, aj, H, g, M):
         g[r] = M[0, r] * b0 + M[1, r] * b1 + M[2, r] * b2
 
 
-@njit
+@njit_inline
 def _surface(c, R, a, u):
     """World point c + R A u and the outward unit normal there, R (A⁻¹u)/|A⁻¹u|."""
     x0 = a[0] * u[0]
@@ -289,7 +289,7 @@ def _surface(c, R, a, u):
     return px, py, pz, nx * inn, ny * inn, nz * inn
 
 
-@njit
+@njit_inline
 def curvature_form(R, a, u, t1x, t1y, t1z, t2x, t2y, t2z):
     """The ellipsoid's curvature tensor at its surface point A u (body frame) in the tangent basis
     (t1, t2) (world vectors): K_ab = (Rᵀt_a)ᵀ D (Rᵀt_b) / |D A u|, D = A⁻² (the Hessian of f over
@@ -309,7 +309,7 @@ def curvature_form(R, a, u, t1x, t1y, t1z, t2x, t2y, t2z):
     return k11 * igl, k12 * igl, k22 * igl
 
 
-@njit
+@njit_inline
 def tangent_basis(nx, ny, nz):
     """Two unit vectors completing n to a right-handed orthonormal basis."""
     ax, ay, az = abs(nx), abs(ny), abs(nz)
@@ -326,7 +326,7 @@ def tangent_basis(nx, ny, nz):
     return t1x, t1y, t1z, ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
 
 
-@njit
+@njit_inline
 def equivalent_radius(k11, k12, k22):
     """R_e = 1/(2√(AB)) with A, B the eigenvalues of S = (K11 K12; K12 K22) (module docstring;
     Johnson eq 4.20 for Miyata's eqs 45-48)."""
@@ -334,7 +334,7 @@ def equivalent_radius(k11, k12, k22):
     return 0.5 / math.sqrt(det) if det > 0.0 else math.inf
 
 
-@njit
+@njit_inline
 def ellipsoid_pair(ci, Ri, ai, cj, Rj, aj, lam_i, lam_j, warm, work, M, H):
     """Lin & Ng contact of ellipsoids i and j (module docstring).
 
@@ -370,7 +370,7 @@ def ellipsoid_pair(ci, Ri, ai, cj, Rj, aj, lam_i, lam_j, warm, work, M, H):
             iti + itj)
 
 
-@njit
+@njit_inline
 def _support(c, R, a, mx, my, mz):
     """The ellipsoid's farthest point along -m (m a world unit vector) and its extent
     √(m_bᵀA²m_b) (Miyata eq 54); returns (px, py, pz, extent, body point x (3 values))."""
@@ -387,19 +387,16 @@ def _support(c, R, a, mx, my, mz):
     return px, py, pz, e, x0, x1, x2
 
 
-@njit
+@njit_inline
 def _radius_at(R, a, x0, x1, x2, nx, ny, nz):
     """R_e = 1/√(det K) of the ellipsoid alone at its body point x, n the contact normal."""
-    u = np.empty(3)
-    u[0] = x0 / a[0]
-    u[1] = x1 / a[1]
-    u[2] = x2 / a[2]
+    u = (x0 / a[0], x1 / a[1], x2 / a[2])  # a tuple: no allocation per plane contact
     t1x, t1y, t1z, t2x, t2y, t2z = tangent_basis(nx, ny, nz)
     k11, k12, k22 = curvature_form(R, a, u, t1x, t1y, t1z, t2x, t2y, t2z)
     return equivalent_radius(0.5 * k11, 0.5 * k12, 0.5 * k22)
 
 
-@njit
+@njit_inline
 def ellipsoid_plane(c, R, a, px0, py0, pz0, mx, my, mz):
     """Ellipsoid against the plane through p0 with unit normal m towards the ellipsoid (Miyata eqs
     50-55).  Returns (overlap, nx, ny, nz (from the ellipsoid to the plane: -m), contact point
