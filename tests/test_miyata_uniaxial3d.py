@@ -230,3 +230,17 @@ def test_a_particles_contact_point_is_its_members_force_weighted_centre_across_t
     pts = wall_contact_points(sim, 1, 2.0)
     np.testing.assert_allclose(pts, [[0.7, 0.3], [0.05, 1.15]], atol=1e-12)
     np.testing.assert_allclose(per_particle_forces(sim, 1), [2.0, 4.0])
+
+
+def test_the_ellipsoid_full_variant_is_the_full_protocol_with_the_seeds_particle(tmp_path):
+    """miyata-uniaxial-3d-ellipsoids-full differs from miyata-uniaxial-3d-full only in the particle and where its
+    checkpoints live, and its checkpoints are never the clumps' (the shape is part of their key)."""
+    from demflow.cases import get_case
+    from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints
+
+    full, ell = get_case("miyata-uniaxial-3d-full"), get_case("miyata-uniaxial-3d-ellipsoids-full")
+    differ = {k for k in full.params if full.params[k] != ell.params[k]}
+    assert differ == {"shape", "checkpoint_dir"} and ell.params["shape"] == "ellipsoids" and ell.slow
+    assert ell.params["box"] == 10.0 and ell.params["n_insert"] == 1500
+    assert ProtocolCheckpoints(tmp_path, full.merged()).dir != ProtocolCheckpoints(tmp_path, ell.merged()).dir
+    assert any(a.startswith("Δt = 0.2 × the Rayleigh step of the smallest semi-axis") for a in ell.assumptions)

@@ -23,7 +23,8 @@ from .conformance_3d import Conformance3D
 from .tradeoff_studies import ImpactTradeoff
 from .tradeoff_cases import FallingDiscTradeoff, MiyataUniaxialTradeoff, PhotoelasticTradeoff
 from .ch3_chain import ImpulseChain
-from .miyata_uniaxial3d import MiyataUniaxial3D, MiyataUniaxial3DEllipsoids, MiyataUniaxial3DFull
+from .miyata_uniaxial3d import (MiyataUniaxial3D, MiyataUniaxial3DEllipsoids, MiyataUniaxial3DEllipsoidsFull,
+                                MiyataUniaxial3DFull)
 from .miyata_uniaxial2d import MiyataUniaxial2D
 from .miyata_uniaxial2d_engines import MiyataUniaxial2DEngines
 from .miyata_ksweep import MiyataUniaxialKSweep
@@ -42,6 +43,7 @@ CASES[ImpulseChain.name] = ImpulseChain()
 CASES[MiyataUniaxial3D.name] = MiyataUniaxial3D()
 CASES[MiyataUniaxial3DEllipsoids.name] = MiyataUniaxial3DEllipsoids()
 CASES[MiyataUniaxial3DFull.name] = MiyataUniaxial3DFull()
+CASES[MiyataUniaxial3DEllipsoidsFull.name] = MiyataUniaxial3DEllipsoidsFull()
 CASES[MiyataUniaxialKSweep.name] = MiyataUniaxialKSweep()
 CASES[MiyataUniaxial2D.name] = MiyataUniaxial2D()
 CASES[MiyataUniaxial2DEngines.name] = MiyataUniaxial2DEngines()

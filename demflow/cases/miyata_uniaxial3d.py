@@ -1041,6 +1041,19 @@ class MiyataUniaxial3DFull(MiyataUniaxial3D):
         return seed_statement_checks(ex)
 
 
+class MiyataUniaxial3DEllipsoidsFull(MiyataUniaxial3DFull):
+    """The seed's own run with the seed's own particle: 1500 ellipsoids in the 10 × 10 m box, one seed, resumable,
+    the seed's statements (Figs 32-35, 37) judged on it (issue 16's acceptance: the ellipsoid variant's figures
+    compared point by point with the seed's statements)."""
+
+    name = "miyata-uniaxial-3d-ellipsoids-full"
+    title = "Uniaxial compression of ellipsoids (Miyata §3.3, the seed's particle), full variant: 1500 particles, 10 × 10 m"
+    params = dict(MiyataUniaxial3DFull.params, shape="ellipsoids",
+                  checkpoint_dir=".demflow/checkpoints/miyata-uniaxial-3d-ellipsoids-full")
+    assumptions = MiyataUniaxial3DEllipsoids.assumptions[:1] + tuple(
+        a for a in MiyataUniaxial3DFull.assumptions if not a.startswith("Δt = 0.2 × the Rayleigh step"))
+
+
 ENGINE_COLOURS = {"yade": "tab:red", "liggghts": "tab:blue"}
 
 
