@@ -91,13 +91,17 @@ FIGURES = (
            (("miyata-uniaxial-2d", r"^Fig\. 30"),)),
     Figure("Miyata", "§3.3, Fig. 32", "3D uniaxial compression of 1500 ellipsoids (10 × 10 m): large settlement at "
            "0-100 kPa, the stress rising more rapidly at 100-400 kPa, almost linear over 400 kPa",
-           (("miyata-uniaxial-3d-full", r"^Fig\. 32|rises with settlement"),)),
+           (("miyata-uniaxial-3d-full", r"^Fig\. 32|rises with settlement"),
+                                    ("miyata-uniaxial-3d-ellipsoids-full", r"^Fig\. 32|rises with settlement"))),
     Figure("Miyata", "§3.3, Fig. 33", "plate contacts rise fast, then slower, then slowest; floor contacts almost "
-           "constant at about 257", (("miyata-uniaxial-3d-full", r"^Fig\. 33"),)),
+           "constant at about 257", (("miyata-uniaxial-3d-full", r"^Fig\. 33"),
+                                    ("miyata-uniaxial-3d-ellipsoids-full", r"^Fig\. 33"))),
     Figure("Miyata", "§3.3, Fig. 35", "per-particle force PDFs at 400-600 kPa: plate ≈ q-model N = 3, floor ≈ Mueth "
-           "et al. (a = 3, b = 0.75, β = 1.5)", (("miyata-uniaxial-3d-full", r"^Fig\. 35"),)),
+           "et al. (a = 3, b = 0.75, β = 1.5)", (("miyata-uniaxial-3d-full", r"^Fig\. 35"),
+                                    ("miyata-uniaxial-3d-ellipsoids-full", r"^Fig\. 35"))),
     Figure("Miyata", "§3.3, Fig. 37", "load support: forces below 0.5<F> carry a small share, medium and large ones "
-           "a larger share", (("miyata-uniaxial-3d-full", r"^Fig\. 37"),)),
+           "a larger share", (("miyata-uniaxial-3d-full", r"^Fig\. 37"),
+                                    ("miyata-uniaxial-3d-ellipsoids-full", r"^Fig\. 37"))),
     Figure("Miyata / Chung & Ooi", "eqs 13-33", "Hertz-Mindlin impacts: contact time, overlap, force, restitution, "
            "sliding (the law the 3D cases use)", (("hertz-impacts", r"."),)),
     Figure("ch3", "§3.5.4.1", "elastic stack of 9 balls: total energy 554.74 J, conserved",
