@@ -149,13 +149,13 @@ def safe_time_step_3d(r: np.ndarray, mass: np.ndarray, mat: np.ndarray, pair_law
 
 
 @njit_parallel
-def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
+def sum_and_integrate(d, P, start, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
-    ``d`` (:class:`~demflow.state.Discs`, slot order).  Each disc sums its contacts in CSR order:
-    ``sidx[e]`` is the contact index k when the disc is the pair's finder and -(k+1) when it is the
-    other disc; f[k] = (fx, fy, Fs) from :func:`demflow.contacts.forces.pair_forces`, the moment
-    being Fs·R of the disc.  The update is thesis eqs 2.27-2.30 (see the module docstring); the new
+    ``d`` (:class:`~demflow.state.Discs`, slot order).  Each disc sums its contacts in CSR order,
+    entries start[i]..start[i+1]: f[e] = (fx, fy, Fs·R), the contact's force on this disc and its
+    moment, written there by :func:`demflow.contacts.forces.pair_forces` (the other disc's share
+    is the negated force, so the sums equal those of f_finder subtracted, to the bit).  The update is thesis eqs 2.27-2.30 (see the module docstring); the new
     x, y, v, ω are also written to the packed rows P (see :func:`demflow.contacts.forces.pack_discs`),
     the contact sums to d.Fx, d.Fy, d.M.  With ``has_ext`` the external force and moment
     ``ext[ext_perm[i]]`` = (fx, fy, m) (the fluid force, moment and buoyancy of a saturated scene,
@@ -186,15 +186,9 @@ def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, 
         sy = 0.0
         sm = 0.0
         for e in range(start[i], start[i + 1]):
-            k = sidx[e]
-            if k >= 0:
-                sx += f[k, 0]
-                sy += f[k, 1]
-            else:
-                k = -k - 1
-                sx -= f[k, 0]
-                sy -= f[k, 1]
-            sm += f[k, 2] * ri
+            sx += f[e, 0]
+            sy += f[e, 1]
+            sm += f[e, 2]
         Fx[i] = sx
         Fy[i] = sy
         M[i] = sm
@@ -203,15 +197,24 @@ def sum_and_integrate(d, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, 
             sx += ext[q, 0]
             sy += ext[q, 1]
             sm += ext[q, 2]
-        a = C[i] * dt / (2.0 * mass[i])
-        vxi = (vx[i] * (1.0 - a) + (sx / mass[i] + gx) * dt) / (1.0 + a)
-        vyi = (vy[i] * (1.0 - a) + (sy / mass[i] + gy) * dt) / (1.0 + a)
-        b = Cr[i] * dt / (2.0 * inertia[i])
-        omi = (om[i] * (1.0 - b) + sm * dt / inertia[i]) / (1.0 + b)
-        mvx = 0.5 * (vx[i] + vxi)
-        mvy = 0.5 * (vy[i] + vyi)
-        mom = 0.5 * (om[i] + omi)
-        diss[i] += (C[i] * (mvx * mvx + mvy * mvy) + Cr[i] * mom * mom) * dt
+        Ci = C[i]
+        Cri = Cr[i]
+        if Ci == 0.0 and Cri == 0.0:
+            # undamped: the same numbers as below with a = b = 0 (x(1 - 0) and y/(1 + 0) are exact), without
+            # its divisions; nothing dissipated
+            vxi = vx[i] + (sx / mass[i] + gx) * dt
+            vyi = vy[i] + (sy / mass[i] + gy) * dt
+            omi = om[i] + sm * dt / inertia[i]
+        else:
+            a = Ci * dt / (2.0 * mass[i])
+            vxi = (vx[i] * (1.0 - a) + (sx / mass[i] + gx) * dt) / (1.0 + a)
+            vyi = (vy[i] * (1.0 - a) + (sy / mass[i] + gy) * dt) / (1.0 + a)
+            b = Cri * dt / (2.0 * inertia[i])
+            omi = (om[i] * (1.0 - b) + sm * dt / inertia[i]) / (1.0 + b)
+            mvx = 0.5 * (vx[i] + vxi)
+            mvy = 0.5 * (vy[i] + vyi)
+            mom = 0.5 * (om[i] + omi)
+            diss[i] += (Ci * (mvx * mvx + mvy * mvy) + Cri * mom * mom) * dt
         vx[i] = vxi
         vy[i] = vyi
         om[i] = omi

@@ -50,8 +50,10 @@ Pairs = namedtuple("Pairs", [
     "hist_p",            # history in internal order
     "sx_p", "sy_p",      # image shifts in internal order
     "start_p", "sidx_p",  # CSR contacts of each slot (sidx = k finder, -(k+1) other)
+    "e_fin", "e_oth",    # pair k's two CSR entries (internal order; e_oth = -1 for a wall pair) (int64)
     "wall_p",            # internal positions of the disc-wall pairs, increasing (int64)
-    "f",                 # (m, 3) per step: force on the finder (fx, fy) and total shear force Fs
+    "f",                 # (entries, 3) per step, in CSR order: each contact's force on the slot's disc
+                         # (fx, fy) and moment Fs·R (pair_forces writes both entries of a pair)
     "out",               # PairOutputs in internal order
 ])
 
@@ -109,7 +111,7 @@ def empty_pairs(n_hist: int) -> Pairs:
     return Pairs(finder=i0, other=i0.copy(), hist=np.zeros((0, n_hist)), sx=f0, sy=f0.copy(),
                  pos=i0.copy(), fin_p=i0.copy(), oth_p=i0.copy(), hist_p=np.zeros((0, n_hist)),
                  sx_p=f0.copy(), sy_p=f0.copy(), start_p=np.zeros(1, np.int64), sidx_p=i0.copy(),
-                 wall_p=i0.copy(), f=np.zeros((0, 3)), out=pair_outputs(0))
+                 e_fin=i0.copy(), e_oth=i0.copy(), wall_p=i0.copy(), f=np.zeros((0, 3)), out=pair_outputs(0))
 
 
 def pair_outputs(m: int) -> PairOutputs:

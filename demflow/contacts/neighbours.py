@@ -323,11 +323,13 @@ def internal_layout(finder, other, n, perm, start, sidx, wall_pairs):
     """Contact lists renumbered for discs stored in the order ``perm`` (slot p holds disc
     perm[p]), pairs grouped by their finder's slot (keeping the key order within a finder).
 
-    Returns (inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p): inv[disc] = slot,
+    Returns (inv, pos, fin_p, oth_p, start_p, sidx_p, e_fin, e_oth, wall_p): inv[disc] = slot,
     pos[k] = internal position of listed pair k; fin_p/oth_p the pairs in internal order
     and numbering (walls keep n + w); (start_p, sidx_p) the per-slot contacts, each
     slot's entries in the order of the disc's own list (start, sidx) so force sums are
-    added in the same order; wall_p = pos[wall_pairs] (same order).
+    added in the same order; e_fin[k'], e_oth[k'] the two entries of internal pair k' (its
+    finder's and its other disc's; -1 for a wall), where the pair pass writes each disc's share;
+    wall_p = pos[wall_pairs] (same order).
     """
     m = finder.shape[0]
     inv = np.empty(n, np.int64)
@@ -363,4 +365,12 @@ def internal_layout(finder, other, n, perm, start, sidx, wall_pairs):
     wall_p = np.empty(wall_pairs.shape[0], np.int64)
     for q in range(wall_pairs.shape[0]):
         wall_p[q] = pos[wall_pairs[q]]
-    return inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p
+    e_fin = np.empty(m, np.int64)
+    e_oth = np.full(m, -1, np.int64)
+    for e in range(start_p[n]):
+        k = sidx_p[e]
+        if k >= 0:
+            e_fin[k] = e
+        else:
+            e_oth[-k - 1] = e
+    return inv, pos, fin_p, oth_p, start_p, sidx_p, e_fin, e_oth, wall_p
