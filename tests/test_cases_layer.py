@@ -170,10 +170,9 @@ def test_report_shows_images_and_links_other_outputs(tmp_path):
 # -- hooks and the typed return
 def test_reference_and_compare_choices_come_from_the_registry():
     with_engines = {"cs-nine-disc", "cs-photoelastic", "conformance-3d", "miyata-uniaxial-3d"}
-    # not the ellipsoid variant: no engine expresses ellipsoids; miyata-uniaxial-2d-engines has stored references
-    # but no live `demflow compare` (its page reads the stored runs)
+    # not the ellipsoid variant: no engine expresses ellipsoids
     assert set(reference_cases()) == with_engines | {"miyata-uniaxial-2d-engines"}
-    assert set(comparison_cases()) == with_engines
+    assert set(comparison_cases()) == with_engines | {"miyata-uniaxial-2d-engines"}
     plan_u = CASES["miyata-uniaxial-3d"].reference_plan()
     assert plan_u.variants("yade") == ("seed1", "seed2") and plan_u.engine("liggghts", "seed2").params["seed"] == 2
     plan3 = CASES["conformance-3d"].reference_plan()

@@ -158,3 +158,47 @@ def test_stored_uniaxial_decks_are_what_the_writer_writes(engine, tmp_path):
         for f in ("deck.py", "deck.in", "scene.json"):
             if (stored / f).exists():
                 assert (tmp_path / f).read_text() == (stored / f).read_text(), (v, f)
+
+
+def test_compare_selects_engines_and_runs_them_live(monkeypatch):
+    """`demflow compare miyata-uniaxial-2d-engines --engines demflow,yade --live` compares YADE only, run now;
+    LIGGGHTS is named as not compared (an info line, not a pass).  The band and the runs are faked: this checks
+    the plumbing, the stored-reference path is the slow page's."""
+    import sys
+
+    import demflow.engines as engines_pkg
+
+    demflow_build = sys.modules["demflow.build"]  # the module (the package exports its function under that name)
+
+    calls = []
+
+    class FakeSim:
+        def run(self, n):
+            pass
+
+        def results(self):
+            return "demflow-results"
+
+    class FakeEngine:
+        def __init__(self, name):
+            self.name = name
+
+        def run(self, scene, workdir, timeout):
+            calls.append((self.name, scene, timeout))
+            return f"{self.name}-results", type("Made", (), {"wall_time_s": 12.5})()
+
+    monkeypatch.setattr(E, "_band", lambda p: {})
+    monkeypatch.setattr(E, "band_params", lambda p: dict(width=2.0, stress_max=9e5))
+    monkeypatch.setattr(E, "_engine_start", lambda p, s: (type("Sc", (), {"n_steps": 3})(), None))
+    monkeypatch.setattr(demflow_build, "build", lambda sc: FakeSim())
+    monkeypatch.setattr(E, "engine_statistics", lambda res, w, smax: ({"who": res}, None, None))
+    monkeypatch.setattr(engines_pkg, "get_engine", FakeEngine)
+    case = E.MiyataUniaxial2DEngines().comparison_case()
+    assert case.engines == ("yade", "liggghts") and case.live is False  # the defaults a plain validate uses
+    case.engines, case.live = ("yade",), True
+    runs = case.run(case.merged()).extras["runs"]
+    assert [c[0] for c in calls] == ["yade"] * len(E.SAMPLES)
+    for s in E.SAMPLES:
+        assert runs[(s, "yade")] == ({"who": "yade-results"}, None, None, 12.5)
+        assert isinstance(runs[(s, "liggghts")], str) and "not compared" in runs[(s, "liggghts")]
+        assert runs[(s, "demflow (same start)")][0] == {"who": "demflow-results"}

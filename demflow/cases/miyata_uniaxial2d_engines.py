@@ -255,6 +255,12 @@ class MiyataUniaxial2DEngines(Case):
     )
     params = dict(n_seeds=8, seed=1, engine_seed=1, engine_margin=1.1, snapshot_every=250, workers=2,
                   checkpoint_dir="runs/checkpoints/miyata-uniaxial-2d-engines")
+    engines = ENGINES  # which engines a run compares (`demflow compare --engines` sets it)
+    live = False  # run the engines now (`demflow compare --live`) instead of loading the stored references
+    engine_timeout = 1800.0  # [s] one live engine run (the stored YADE runs took 60-120 s)
+
+    def comparison_case(self):
+        return type(self)()
 
     def reference_plan(self) -> ReferencePlan:
         return ReferencePlan(store=STORE, params=dict(self.params),
@@ -283,6 +289,19 @@ class MiyataUniaxial2DEngines(Case):
             dt_run = time.perf_counter() - t
             runs[(s, "demflow (same start)")] = engine_statistics(sim.results(), q["width"], q["stress_max"]) + (dt_run,)
             for e in ENGINES:
+                if e not in self.engines:
+                    runs[(s, e)] = (f"not compared in this run (demflow compare {self.name} --engines "
+                                    f"{','.join(('demflow',) + tuple(self.engines))})")
+                    continue
+                if self.live:
+                    import tempfile
+
+                    from ..engines import get_engine
+
+                    with tempfile.TemporaryDirectory() as tmp:
+                        res, made = get_engine(e).run(sc, tmp, timeout=self.engine_timeout)
+                    runs[(s, e)] = engine_statistics(res, q["width"], q["stress_max"]) + (float(made.wall_time_s),)
+                    continue
                 try:
                     res = reference.load(STORE, f"{s}-seed{seed}", e)
                 except EngineError as err:
@@ -317,7 +336,7 @@ class MiyataUniaxial2DEngines(Case):
             for who in ("demflow (same start)",) + ENGINES:
                 got = run.extras["runs"][(s, who)]
                 if isinstance(got, str):
-                    out.append(Check.info(f"{s} {who}: no stored reference run", math.nan, SRC, got))
+                    out.append(Check.info(f"{s} {who}: no engine run", math.nan, SRC, got))
                     continue
                 st, fe, _curve, _t = got
                 kind = "self-consistency" if who.startswith("demflow") else "cross-code"
