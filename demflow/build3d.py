@@ -166,15 +166,18 @@ def _walls(scene, walls, index):
     planes = Planes3(point=point, normal=normal, vel=np.zeros((npl, 3)),
                      mat=np.array([index[m] for m in plane_mats], np.int64), force=np.zeros((npl, 3)),
                      ref=point.copy(), is_mesh=is_mesh)
-    tv, tw = [], []
+    tv, tw, ti = [], [], []
+    periodic = scene.box.periodic_x is not None or scene.box.periodic_y is not None
     for q, w in enumerate(walls):
         if is_mesh[q]:
             v = np.asarray(w.vertices, np.float64)
             t = np.asarray(w.triangles, np.int64)
             tv.append(np.concatenate([v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]], axis=1))
             tw.append(np.full(len(t), q, np.int64))
+            ti.append(np.full(len(t), 1 if (periodic and w.periodic_images) else 0, np.int8))
     tris = Triangles3(v=np.concatenate(tv) if tv else np.zeros((0, 9)),
-                      wall=np.concatenate(tw) if tw else np.zeros(0, np.int64))
+                      wall=np.concatenate(tw) if tw else np.zeros(0, np.int64),
+                      imaged=np.concatenate(ti) if ti else np.zeros(0, np.int8))
     K = max([len(p.phases) for p in walls] + [1])
     ps = np.zeros((npl, K), np.int64)
     pe = np.zeros((npl, K), np.int64)
@@ -318,16 +321,18 @@ def _skin_and_box(scene, r):
         if length and length <= 2.0 * reach:
             raise SceneError(f"scene.box.periodic_{axis}: the period {length:.6g} must exceed twice the reach "
                              f"2·r_max + skin = {reach:.6g} (minimum image); widen the box or reduce the skin")
-    _warn_periodic_meshes(scene, float(r.max()) + skin)
+    _check_periodic_meshes(scene, float(r.max()) + skin)
     return skin, box
 
 
-def _warn_periodic_meshes(scene, reach: float) -> None:
-    """Warn (PeriodicMeshWarning) for each mesh whose vertices, as built, lie within ``reach`` (r_max + skin)
-    of a periodic boundary or beyond it: mesh contacts take no periodic image, so there the contacts are
-    not those of a periodic mesh (measured: an ellipsoid wrapped from a ramp's low end at x = 0 to its high
-    end at x = L started 0.17 of its thinnest semi-axis deep and was launched).  Phases that move a mesh
-    later are not followed."""
+def _check_periodic_meshes(scene, reach: float) -> None:
+    """Meshes in a periodic box.  With ``periodic_images`` (the default) a particle meets each triangle
+    through its nearest image, which is the only one within its reach when every triangle is narrower than
+    period − 2·reach (``reach`` = r_max + skin): a wider triangle is refused.  Without, warn
+    (PeriodicMeshWarning) for each mesh whose vertices lie within ``reach`` of a periodic boundary or beyond
+    it: there the contacts are not those of a periodic mesh (measured: an ellipsoid wrapped from a ramp's
+    low end at x = 0 to its high end at x = L started 0.17 of its thinnest semi-axis deep and was launched).
+    Phases that move a mesh later are not followed by the warning."""
     import warnings
 
     from .scene import PeriodicMeshWarning
@@ -338,13 +343,41 @@ def _warn_periodic_meshes(scene, reach: float) -> None:
             if per is None or v.size == 0:
                 continue
             lo, hi = float(per[0]), float(per[1])
+            if mesh.periodic_images:
+                t = np.asarray(mesh.triangles, np.int64)
+                width = v[t, a].max(axis=1) - v[t, a].min(axis=1)
+                widest = int(np.argmax(width))
+                limit = (hi - lo) - 2.0 * reach
+                if width[widest] >= limit:
+                    raise SceneError(
+                        f"mesh {mesh.name!r}: triangle {widest} is {width[widest]:.6g} wide along {axis}; with "
+                        f"periodic_images every triangle must be narrower than the period {hi - lo:.6g} minus "
+                        f"2·(r_max + skin) = {limit:.6g}, or a particle could reach two images of it. Split it into "
+                        "narrower triangles (or set periodic_images=False: no images)")
+                continue
             margin = min(float(v[:, a].min()) - lo, hi - float(v[:, a].max()))
             if margin < reach:
                 warnings.warn(f"scene {scene.name!r}: mesh {mesh.name!r} comes to {margin:.4g} of the periodic boundary "
                               f"along {axis} (scene.box.periodic_{axis}={tuple(per)}), less than a particle's reach "
-                              f"r_max + skin = {reach:.4g}; mesh contacts take no periodic image, so a particle wrapped "
-                              "across that boundary meets the mesh's other end. Keep the mesh at least that far inside "
-                              "the period, or use a plane", PeriodicMeshWarning, stacklevel=4)
+                              f"r_max + skin = {reach:.4g}; the mesh has periodic_images=False, so a particle wrapped "
+                              "across that boundary meets the mesh's other end. Set periodic_images=True, or keep the "
+                              "mesh at least that far inside the period", PeriodicMeshWarning,
+                              stacklevel=_stacklevel_outside_package())
+
+
+def _stacklevel_outside_package() -> int:
+    """``warnings.warn``'s stacklevel, for a warning issued by this function's caller, that points at the
+    first frame outside the demflow package (the user's call of ``build``)."""
+    import inspect
+    import os
+
+    pkg = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    frame = inspect.currentframe().f_back
+    level = 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(pkg):
+        frame = frame.f_back
+        level += 1
+    return level
 
 
 def build3d(scene: Scene3D) -> Simulation3D:

@@ -143,14 +143,22 @@ class TriangleMesh:
     [length], ``triangles`` (nt, 3) vertex indices.  A sphere touches a triangle at the triangle's
     point closest to its centre (face, edge or vertex); an edge or vertex contact counts only when no
     face of the same mesh touches that sphere, and once for triangles sharing it.  ``phases``
-    translate the whole mesh.  Meshes are not imaged across periodic boundaries: build warns
-    (``PeriodicMeshWarning``) for a mesh within a particle's reach of one."""
+    translate the whole mesh.
+
+    periodic_images : in a box periodic along x or y, a particle meets each triangle through its
+        nearest periodic image (the mesh may lie anywhere, across or outside the period, as with
+        particles).  Each triangle must then be narrower than period − 2·(r_max + skin) along every
+        periodic axis, so that no particle reaches two images of one triangle (build refuses a wider
+        one: split it).  ``False``: no images, a particle wrapped across the boundary meets the
+        mesh only where it lies (build warns, ``PeriodicMeshWarning``, for a mesh within a particle's
+        reach of a periodic boundary)."""
 
     name: str
     vertices: Sequence[Sequence[float]]
     triangles: Sequence[Sequence[int]]
     material: str
     phases: tuple[PlanePhase, ...] = ()
+    periodic_images: bool = True
 
 
 @dataclass(frozen=True)
@@ -340,6 +348,7 @@ def check_scene3d(scene: Scene3D) -> None:
         if mh.material not in scene.materials:
             raise SceneError(f"{path}.material={mh.material!r} is not declared; add it to scene.materials")
         _phases(f"{path}.phases", mh.phases)
+        check_flag(f"{path}.periodic_images", mh.periodic_images)
     check_items("scene.planes", scene.planes)
     for k, p in enumerate(scene.planes):
         path = f"scene.planes[{k}]"

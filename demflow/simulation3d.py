@@ -107,7 +107,7 @@ class Simulation3D:
                 sp.pos[:, a] -= k * length
                 sp.img[:, a] += k
         i, j, shift = sphere_pairs(sp.pos, sp.r, self.skin, self.box, self.planes.point, self.planes.normal,
-                                   self.planes.is_mesh, self.tris.v, sp.body)
+                                   self.planes.is_mesh, self.tris.v, sp.body, self.tris.imaged)
         old = self.pairs
         w = old.hist.shape[1]
         # the history, and the last step's forces, overlaps and sliding flags (what a reader of the contacts sees

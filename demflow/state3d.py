@@ -65,6 +65,7 @@ Planes3 = namedtuple("Planes3", [
 Triangles3 = namedtuple("Triangles3", [
     "v",     # (nt, 9) current vertices a, b, c [length]; they translate with their wall body
     "wall",  # (nt,) int64 the wall body (index into Planes3) each triangle belongs to
+    "imaged",  # (nt,) int8: 1 = met through its nearest periodic image (TriangleMesh.periodic_images)
 ])
 
 Loading3 = namedtuple("Loading3", [

@@ -46,7 +46,7 @@ def base3d() -> Scene3D:
         planes=[Plane("floor", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "w", phases=(PlanePhase(10, (0.0, 0.0, 0.0)),)),
                 Plane("plate", (0.0, 0.0, 0.1), (0.0, 0.0, -1.0), "w",
                       servo=PlateServo(force=1.0, gain=0.1, v_max=0.1, start=2))],
-        meshes=[TriangleMesh("ramp", [(0.0, 0.0, 0.001), (0.1, 0.0, 0.001), (0.1, 0.1, 0.001)], [(0, 1, 2)], "w")],
+        meshes=[TriangleMesh("ramp", [(0.0, 0.0, 0.001), (0.05, 0.0, 0.001), (0.05, 0.05, 0.001)], [(0, 1, 2)], "w")],
         clumps=Clumps(_template(), x=[0.03, 0.07], y=[0.08, 0.08], z=[0.03, 0.03], material="g"),
         gravity=(0.0, 0.0, -9.81), local_damping=0.1, damping=GlobalDamping(alpha=0.1), n_steps=20,
         box=Box(periodic_x=(0.0, 0.12), periodic_y=(0.0, 0.12)),
@@ -209,13 +209,14 @@ def _(pick):
 
 @fault3d("3d walls", "triangle mesh")
 def _(pick):
-    key = pick(["vertices", "triangles", "material", "name", "phases"])
+    key = pick(["vertices", "triangles", "material", "name", "phases", "periodic_images"])
     sc = base3d()
     m = sc.meshes[0]
     v = {"vertices": pick([[(0.0, 0.0)], [(NAN, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)], "abc"]),
          "triangles": pick([[(0, 1, 3)], [(0, 1)], [(0.0, 1.0, 2.0)], [(0, 0, 1)], []]),
          "material": pick(["nope", None]), "name": pick(BAD_IDENT),
-         "phases": (PlanePhase(pick([-1, 1.5, None]), (0.0, 0.0, 0.0)),)}[key]
+         "phases": (PlanePhase(pick([-1, 1.5, None]), (0.0, 0.0, 0.0)),),
+         "periodic_images": pick(["yes", None, 2])}[key]
     sc.meshes = [_set(m, **{key: v})]
     path = "scene.meshes[0]." + ("phases[0].cycles" if key == "phases" else key)
     return sc, path, v

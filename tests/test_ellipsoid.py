@@ -510,3 +510,39 @@ def test_an_ellipsoid_settles_in_a_v_groove_mesh_touching_both_faces():
         ext = math.sqrt(np.sum((ax * (R.T @ m)) ** 2))
         overlap = ext - c @ m  # both planes pass through the origin
         assert 0 < overlap < 1e-3 * ax.min()
+
+
+def test_an_imaged_mesh_acts_on_an_ellipsoid_as_the_plane():
+    """A floor mesh lying over x in [0, 2] of a box periodic over [-1, 1] (half of it beyond the period) is met
+    through its image by an ellipsoid at x = -0.4: the same contact force as the plane z = 0, and none without
+    images (negative control)."""
+    q = np.array((0.9, 0.3, -0.2, 0.25)) / np.linalg.norm((0.9, 0.3, -0.2, 0.25))
+    ext = math.sqrt(np.sum((np.array([0.3, 0.2, 0.12]) * _rot(q).reshape(3, 3)[2]) ** 2))
+    g = np.linspace(0.0, 2.0, 5)
+    v = [(a, b - 1.0, 0.0) for b in g for a in g]
+    tri = [t for r in range(4) for c in range(4)
+           for p in [r * 5 + c] for t in ((p, p + 1, p + 6), (p, p + 6, p + 5))]
+
+    def one(wall, name):
+        sc = df.Scene3D(name=name, spheres=None, materials={"rock": ROCK},
+                        laws={("rock", "rock"): df.HertzMindlinLaw(friction=0.4)},
+                        planes=[wall] if isinstance(wall, df.Plane) else [],
+                        meshes=[wall] if isinstance(wall, df.TriangleMesh) else [],
+                        ellipsoids=df.Ellipsoids(axes=[[0.3, 0.2, 0.12]], x=[-0.4], y=[0.05], z=[ext - 0.004],
+                                                 material="rock", orientation=[q], velocity=[[0.02, -0.01, -0.03]],
+                                                 angular_velocity=[[0.4, 0.1, -0.2]]),
+                        box=df.Box(periodic_x=(-1.0, 1.0), periodic_y=(-1.0, 1.0)))
+        sim = df.build(sc)
+        contact_pass(sim)
+        return sim
+
+    p = one(df.Plane("ground", (0, 0, 0), (0, 0, 1), "rock"), "plane")
+    m = one(df.TriangleMesh("ground", v, tri, "rock"), "mesh")
+    assert p.pairs.ovl.max() == pytest.approx(0.004, rel=1e-9)
+    t = tol("ellipsoid.sphere-limit").value
+    F = np.abs(p.spheres.FM).max()
+    np.testing.assert_allclose(m.spheres.FM, p.spheres.FM, rtol=0, atol=t * F)
+    np.testing.assert_allclose(m.planes.force, p.planes.force, rtol=0, atol=t * F)
+    with pytest.warns(df.PeriodicMeshWarning):
+        off = one(df.TriangleMesh("ground", v, tri, "rock", periodic_images=False), "off")
+    assert np.abs(off.spheres.FM).max() == 0.0

@@ -369,3 +369,92 @@ def test_a_3d_run_too_long_to_record_is_refused_up_front():
     with pytest.raises(df.SceneError, match="run\\(n_steps\\)"):
         sim.run(-5)
     assert sim.step == 0
+
+
+# ---------------------------------------------------------------------------- meshes in a periodic box
+def _grid_mesh(x0, y0, side, n, z=0.0, material="rigid", name="floor", **kw):
+    """A flat square [x0, x0 + side] × [y0, y0 + side] at height z as n × n squares of two triangles each."""
+    g = np.linspace(0.0, side, n + 1)
+    v = [(x0 + a, y0 + b, z) for b in g for a in g]
+    t = []
+    for r in range(n):
+        for c in range(n):
+            p = r * (n + 1) + c
+            t += [(p, p + 1, p + n + 2), (p, p + n + 2, p + n + 1)]
+    return df.TriangleMesh(name, v, t, material, **kw)
+
+
+def _periodic_drop(wall, name, x=0.005, y=0.0113):
+    """The oblique drop of _drop (30°, along +x) in a box periodic along x and y, period 20 mm, at x."""
+    sc = _drop("plane", (x, y), angle_deg=30.0, name=name)
+    sc.box = df.Box(periodic_x=(0.0, 0.02), periodic_y=(0.0, 0.02))
+    if isinstance(wall, df.TriangleMesh):
+        sc.planes, sc.meshes = [], [wall]
+    return sc
+
+
+def test_a_mesh_outside_the_period_is_met_through_its_periodic_image():
+    """A flat floor mesh lying over x in [10, 30] mm of a box periodic over [0, 20] mm (half of it beyond the
+    period) carries a sphere dropped at x = 5 mm through its image as the plane z = 0 does (velocities to round-off,
+    force on the mesh = force on the plane); without images the sphere meets nothing there and falls through."""
+    ref = df.build(_periodic_drop(df.Plane("plane", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "rigid"), "pd-plane")).run(600)
+    sim = df.build(_periodic_drop(_grid_mesh(0.01, 0.0, 0.02, 4), "pd-mesh")).run(600)
+    f_ref = ref.tables()["records"].plane_fz.to_numpy()
+    assert np.abs(f_ref).max() > 0
+    np.testing.assert_allclose(sim.spheres.vel, ref.spheres.vel, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(sim.spheres.angvel, ref.spheres.angvel, rtol=0, atol=1e-6)
+    f_mesh = sim.tables()["records"].floor_fz.to_numpy()
+    np.testing.assert_allclose(f_mesh, f_ref, rtol=1e-9, atol=1e-9 * np.abs(f_ref).max())
+    assert ref.spheres.vel[0, 2] > 0  # it rebounded
+    # negative control: the same mesh seen only where it lies
+    with pytest.warns(df.PeriodicMeshWarning):
+        off = df.build(_periodic_drop(_grid_mesh(0.01, 0.0, 0.02, 4, periodic_images=False), "pd-off")).run(600)
+    assert off.tables()["records"].floor_fz.abs().max() == 0.0 and off.spheres.vel[0, 2] < 0
+
+
+def test_a_sphere_crossing_the_boundary_stays_on_an_imaged_mesh():
+    """A sphere rolling along +x over a floor mesh that covers the period once, shifted by half of it, crosses
+    x = 20 mm (wrapped) and keeps its contact with the floor as on a plane."""
+    def scene(wall, name):
+        sc = _periodic_drop(wall, name, x=0.015)
+        sc.spheres = df.Spheres(x=[0.015], y=[0.0113], z=[0.0025], radius=[0.0025], material="ball",
+                                velocity=[[1.0, 0.0, 0.0]], angular_velocity=[[0.0, 1.0 / 0.0025, 0.0]])
+        sc.gravity = (0.0, 0.0, -9.81)
+        return sc
+
+    ref = df.build(scene(df.Plane("plane", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "rigid"), "roll-plane"))
+    sim = df.build(scene(_grid_mesh(0.01, 0.0, 0.02, 4), "roll-mesh"))
+    steps = int(round(0.012 / 1.0 / sim.dt))  # 12 mm of travel: across x = 20 mm
+    ref.run(steps)
+    sim.run(steps)
+    assert sim.spheres.pos[0, 0] < 0.01  # wrapped across the boundary
+    rec, rec_ref = sim.tables()["records"], ref.tables()["records"]
+    assert (rec_ref.contacts == 1).mean() > 0.9  # it rolls on the plane
+    # the floor's force as the plane's (the contact count may differ where the overlap passes through zero)
+    weight = 9.81 * float(sim.spheres.mass[0])
+    np.testing.assert_allclose(rec.floor_fz.to_numpy(), rec_ref.plane_fz.to_numpy(), rtol=0, atol=1e-6 * weight)
+    np.testing.assert_allclose(sim.spheres.pos, ref.spheres.pos, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sim.spheres.vel, ref.spheres.vel, rtol=0, atol=1e-7)
+
+
+def test_a_triangle_too_wide_for_periodic_images_is_refused():
+    with pytest.raises(df.SceneError, match=r"triangle 0 is 0\.02 wide along x.*Split it"):
+        df.build(_periodic_drop(_grid_mesh(0.0, 0.0, 0.02, 1), "wide"))
+    # the same mesh without images builds (and is named for the boundary it reaches)
+    with pytest.warns(df.PeriodicMeshWarning):
+        df.build(_periodic_drop(_grid_mesh(0.0, 0.0, 0.02, 1, periodic_images=False), "wide-off"))
+
+
+def test_engine_decks_refuse_meshes(tmp_path):
+    from demflow.engines import EngineUnsupported, get_engine3d
+
+    import dataclasses
+
+    for engine, spring in (("yade", "incremental"), ("liggghts", "total")):  # each engine's matching shear spring
+        sc = _drop("square", (0.0, 0.0), name="deck_mesh")
+        sc.laws = {k: dataclasses.replace(v, shear_spring=spring) for k, v in sc.laws.items()}
+        with pytest.raises(EngineUnsupported, match="triangle meshes .'mesh'."):
+            get_engine3d(engine).write_deck(sc, df.build(sc), tmp_path / engine)
+        (tmp_path / engine).mkdir()
+        sc.meshes, sc.planes = [], [df.Plane("plane", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "rigid")]  # control: a plane
+        get_engine3d(engine).write_deck(sc, df.build(sc), tmp_path / engine)

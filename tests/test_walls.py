@@ -69,8 +69,9 @@ def test_wall_rotation_about_a_pivot():
 
 
 def test_mesh_near_a_periodic_boundary_warns():
-    """Mesh contacts take no periodic image: a mesh within a particle's reach of a periodic boundary is named at
-    build (PeriodicMeshWarning), once per axis; the same kind of ramp kept that far inside the period is not."""
+    """A mesh with periodic_images=False within a particle's reach of a periodic boundary is named at build
+    (PeriodicMeshWarning), once per axis, and the warning points at the caller's line; the same kind of ramp kept
+    that far inside the period is not."""
     import sys
     import warnings
     from pathlib import Path
@@ -81,9 +82,12 @@ def test_mesh_near_a_periodic_boundary_warns():
     import golden3d_scenes as g3
 
     with pytest.warns(df.PeriodicMeshWarning) as got:
-        build(g3.settling_bed())  # its ramp spans the whole period along x and y
-    msgs = [str(w.message) for w in got if issubclass(w.category, df.PeriodicMeshWarning)]
+        build(g3.settling_bed())  # its ramp spans the whole period along x and y, without images
+    warned = [w for w in got if issubclass(w.category, df.PeriodicMeshWarning)]
+    msgs = [str(w.message) for w in warned]
     assert len(msgs) == 2 and "along x" in msgs[0] and "along y" in msgs[1] and "'ramp'" in msgs[0]
+    assert "periodic_images=True" in msgs[0]
+    assert all(Path(w.filename).resolve() == Path(__file__).resolve() for w in warned), [w.filename for w in warned]
     with warnings.catch_warnings():
         warnings.simplefilter("error", df.PeriodicMeshWarning)
         build(g3.ellipsoid_bed())  # its ramp stays 6 mm inside, more than r_max + skin

@@ -30,7 +30,7 @@ import numpy as np
 from ..jit import njit, njit_inline
 from ..laws.base import law_energy3, law_force3
 from ..shapes.ellipsoid import FACE, ellipsoid_pair, ellipsoid_plane, ellipsoid_triangle
-from .spheres import relative_velocity, rotate_history
+from .spheres import relative_velocity, rotate_history, triangle_image
 
 BLOWUP_OVERLAP = 1
 WARM_COLUMNS = 3  # history columns after the law's: warm flag, λ_i, λ_j
@@ -42,6 +42,7 @@ def _triangle_pass(pos, rot, axes, amin, pairs, n, nw, tris, out):
     overlap, n (3), point (3), R_e, active (1/0)."""
     m = pairs.i.shape[0]
     region = np.empty(out.shape[0], np.int64)
+    image = np.empty(9)
     q = 0
     k = 0
     while k < m:
@@ -53,7 +54,8 @@ def _triangle_pass(pos, rot, axes, amin, pairs, n, nw, tris, out):
         k0 = k
         while k < m and pairs.i[k] == i and pairs.j[k] >= n + nw:
             t = pairs.j[k] - n - nw
-            o, nx, ny, nz, cx, cy, cz, re, reg = ellipsoid_triangle(pos[i], rot[i], axes[i], tris.v[t])
+            o, nx, ny, nz, cx, cy, cz, re, reg = ellipsoid_triangle(pos[i], rot[i], axes[i],
+                                                                    triangle_image(tris.v, t, pairs.shift, k, image))
             out[q, 0] = o
             out[q, 1] = nx
             out[q, 2] = ny

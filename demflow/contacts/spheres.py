@@ -166,42 +166,73 @@ def closest_point_triangle(px, py, pz, v):
     return ax + abx * t1 + acx * t2, ay + aby * t1 + acy * t2, az + abz * t1 + acz * t2, FACE
 
 
+@njit_inline
+def _near_triangle(px, py, pz, reach, tv, t):
+    """Is the point (px, py, pz) within ``reach`` of triangle t (a bounding-box rejection first)?"""
+    lo0 = min(tv[t, 0], tv[t, 3], tv[t, 6]) - reach
+    hi0 = max(tv[t, 0], tv[t, 3], tv[t, 6]) + reach
+    if px < lo0 or px > hi0:
+        return False
+    lo1 = min(tv[t, 1], tv[t, 4], tv[t, 7]) - reach
+    hi1 = max(tv[t, 1], tv[t, 4], tv[t, 7]) + reach
+    if py < lo1 or py > hi1:
+        return False
+    lo2 = min(tv[t, 2], tv[t, 5], tv[t, 8]) - reach
+    hi2 = max(tv[t, 2], tv[t, 5], tv[t, 8]) + reach
+    if pz < lo2 or pz > hi2:
+        return False
+    cx, cy, cz, _ = closest_point_triangle(px, py, pz, tv[t])
+    return (cx - px) ** 2 + (cy - py) ** 2 + (cz - pz) ** 2 < reach * reach
+
+
 @njit
-def _triangle_candidates(pos, r, skin, tv, count_only, out_i, out_t):
+def _triangle_candidates(pos, r, skin, tv, imaged, periodic, period, count_only, out_i, out_t, out_s):
     """Sphere-triangle pairs within r + skin (brute force over triangles: O(n × n_triangles),
-    with an early bounding-box rejection)."""
+    with an early bounding-box rejection).  A triangle with ``imaged`` set is also tried at its
+    periodic images (shifted by ±period along each periodic axis); out_s holds the shift of the
+    image found (build allows at most one within reach: see TriangleMesh.periodic_images)."""
     m = 0
     for i in range(pos.shape[0]):
         reach = r[i] + skin
         for t in range(tv.shape[0]):
-            lo0 = min(tv[t, 0], tv[t, 3], tv[t, 6]) - reach
-            hi0 = max(tv[t, 0], tv[t, 3], tv[t, 6]) + reach
-            if pos[i, 0] < lo0 or pos[i, 0] > hi0:
-                continue
-            lo1 = min(tv[t, 1], tv[t, 4], tv[t, 7]) - reach
-            hi1 = max(tv[t, 1], tv[t, 4], tv[t, 7]) + reach
-            if pos[i, 1] < lo1 or pos[i, 1] > hi1:
-                continue
-            lo2 = min(tv[t, 2], tv[t, 5], tv[t, 8]) - reach
-            hi2 = max(tv[t, 2], tv[t, 5], tv[t, 8]) + reach
-            if pos[i, 2] < lo2 or pos[i, 2] > hi2:
-                continue
-            cx, cy, cz, _ = closest_point_triangle(pos[i, 0], pos[i, 1], pos[i, 2], tv[t])
-            d2 = (cx - pos[i, 0]) ** 2 + (cy - pos[i, 1]) ** 2 + (cz - pos[i, 2]) ** 2
-            if d2 < reach * reach:
+            sx = 0.0
+            sy = 0.0
+            found = _near_triangle(pos[i, 0], pos[i, 1], pos[i, 2], reach, tv, t)
+            if not found and imaged[t]:
+                for ix in range(-1, 2):
+                    if ix != 0 and not periodic[0]:
+                        continue
+                    for iy in range(-1, 2):
+                        if (iy != 0 and not periodic[1]) or (ix == 0 and iy == 0):
+                            continue
+                        # the sphere against the triangle shifted by s is the sphere at -s against the triangle
+                        if _near_triangle(pos[i, 0] - ix * period[0], pos[i, 1] - iy * period[1], pos[i, 2], reach,
+                                          tv, t):
+                            found = True
+                            sx = ix * period[0]
+                            sy = iy * period[1]
+                            break
+                    if found:
+                        break
+            if found:
                 if not count_only:
                     out_i[m] = i
                     out_t[m] = t
+                    out_s[m, 0] = sx
+                    out_s[m, 1] = sy
+                    out_s[m, 2] = 0.0
                 m += 1
     return m
 
 
 def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point: np.ndarray,
                  planes_normal: np.ndarray, is_mesh: np.ndarray | None = None, tri_v: np.ndarray | None = None,
-                 body: np.ndarray | None = None):
+                 body: np.ndarray | None = None, tri_imaged: np.ndarray | None = None):
     """The neighbour list (i, j, shift) in key order: sphere pairs within ``skin`` by cells, then
     sphere-plane pairs (j = n + wall) within r + skin, then sphere-triangle pairs
-    (j = n + n_walls + triangle) whose closest point is within r + skin."""
+    (j = n + n_walls + triangle) whose closest point is within r + skin.  ``shift``: the image
+    shift of the other sphere, or of the triangle (those with ``tri_imaged`` set, in a periodic box:
+    the particle meets the triangle at vertices + shift); zero for planes."""
     n = pos.shape[0]
     side0 = 2.0 * (float(r.max()) if n else 1.0) + skin
     periodic = np.array([box.periodic_x, box.periodic_y, False])
@@ -247,24 +278,29 @@ def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point:
         near = np.nonzero(h < r + skin)[0]
         wi.append(near)
         wj.append(np.full(near.size, n + p, np.int64))
+    ws = [np.zeros((len(a), 3)) for a in wi]
     if tri_v is not None and tri_v.shape[0]:
+        imaged = np.zeros(tri_v.shape[0], np.int8) if tri_imaged is None else tri_imaged
         e = np.empty(0, np.int64)
-        mt = _triangle_candidates(pos, r, skin, tri_v, True, e, e)
+        mt = _triangle_candidates(pos, r, skin, tri_v, imaged, periodic, period, True, e, e, e_s)
         ti = np.empty(mt, np.int64)
         tt = np.empty(mt, np.int64)
-        _triangle_candidates(pos, r, skin, tri_v, False, ti, tt)
+        ts = np.empty((mt, 3))
+        _triangle_candidates(pos, r, skin, tri_v, imaged, periodic, period, False, ti, tt, ts)
         wi.append(ti)
         wj.append(n + nw + tt)
+        ws.append(ts)
     if wi:
         qi = np.concatenate(wi)
         qj = np.concatenate(wj)
+        qs = np.concatenate(ws)
         order = np.lexsort((qj, qi))
-        qi, qj = qi[order], qj[order]
+        qi, qj, qs = qi[order], qj[order], qs[order]
         nk = n + nw + (0 if tri_v is None else tri_v.shape[0])
         allk = np.concatenate([pi * nk + pj, qi * nk + qj])
         ii = np.concatenate([pi, qi])
         jj = np.concatenate([pj, qj])
-        ss = np.concatenate([ps, np.zeros((qi.size, 3))])
+        ss = np.concatenate([ps, qs])
         order = np.argsort(allk, kind="stable")
         return ii[order], jj[order], ss[order]
     return pi, pj, ps
@@ -321,6 +357,19 @@ def pack_rows(sp):
             P[i, 6 + a] = sp.angvel[i, a]
 
 
+@njit_inline
+def triangle_image(tv, t, shift, k, image):
+    """Triangle t's vertices as pair k sees them: tv[t] itself, or its periodic image tv[t] + shift[k]
+    written into ``image`` (9)."""
+    if shift[k, 0] == 0.0 and shift[k, 1] == 0.0 and shift[k, 2] == 0.0:
+        return tv[t]
+    for c in range(3):
+        image[3 * c] = tv[t, 3 * c] + shift[k, 0]
+        image[3 * c + 1] = tv[t, 3 * c + 1] + shift[k, 1]
+        image[3 * c + 2] = tv[t, 3 * c + 2] + shift[k, 2]
+    return image
+
+
 @njit
 def triangle_contacts(P, pairs, n, nw, tris):
     """Closest points of the listed sphere-triangle pairs (in pair order) and which of them act:
@@ -336,6 +385,7 @@ def triangle_contacts(P, pairs, n, nw, tris):
     region = np.empty(mt, np.int64)
     touch = np.zeros(mt, np.int8)
     active = np.zeros(mt, np.int8)
+    image = np.empty(9)
     q = 0
     k = 0
     while k < m:
@@ -346,7 +396,8 @@ def triangle_contacts(P, pairs, n, nw, tris):
         q0 = q
         while k < m and pairs.i[k] == i and pairs.j[k] >= n + nw:
             t = pairs.j[k] - n - nw
-            cx, cy, cz, reg = closest_point_triangle(P[i, 0], P[i, 1], P[i, 2], tris.v[t])
+            cx, cy, cz, reg = closest_point_triangle(P[i, 0], P[i, 1], P[i, 2],
+                                                     triangle_image(tris.v, t, pairs.shift, k, image))
             cp[q, 0] = cx
             cp[q, 1] = cy
             cp[q, 2] = cz

@@ -63,6 +63,11 @@ def scene3d_numbers(scene, sim) -> dict:
         raise EngineUnsupported(
             f"scene {scene.name!r} has ellipsoids; the 3D engine decks write spheres only (neither deck expresses "
             "the Lin & Ng ellipsoid contact): run it in demflow")
+    if getattr(scene, "meshes", None):
+        raise EngineUnsupported(
+            f"scene {scene.name!r} has triangle meshes ({', '.join(repr(m.name) for m in scene.meshes)}); the 3D "
+            "engine decks write spheres, clumps and planes only (a mesh would be left out of the deck): run it in "
+            "demflow, or give the walls as planes")
     names = [check_identifier("material", m) for m in scene.materials]
     law = sim.law_params
     if not isinstance(law, HertzParams):
