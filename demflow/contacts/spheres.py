@@ -374,7 +374,10 @@ def triangle_image(tv, t, shift, k, image):
 def triangle_contacts(P, pairs, n, nw, tris):
     """Closest points of the listed sphere-triangle pairs (in pair order) and which of them act:
     a face contact always; an edge or vertex contact only when no face of the same mesh touches
-    that sphere, and once per point (two triangles sharing the edge or vertex give the same point).
+    that sphere, once per point (two triangles sharing the edge or vertex give the same point), and
+    only when no touching triangle of the mesh holds that point and has a closer point of its own
+    (then the distance falls from it across that triangle: it is no local minimum of the distance to
+    the mesh, e.g. a vertex near a sphere whose closest point lies on a shared edge of a flat mesh).
     Returns (points (mt, 3), active (mt,) int8)."""
     m = pairs.i.shape[0]
     mt = 0
@@ -385,6 +388,7 @@ def triangle_contacts(P, pairs, n, nw, tris):
     region = np.empty(mt, np.int64)
     touch = np.zeros(mt, np.int8)
     active = np.zeros(mt, np.int8)
+    dist2 = np.empty(mt)
     image = np.empty(9)
     q = 0
     k = 0
@@ -403,6 +407,7 @@ def triangle_contacts(P, pairs, n, nw, tris):
             cp[q, 2] = cz
             region[q] = reg
             d2 = (cx - P[i, 0]) ** 2 + (cy - P[i, 1]) ** 2 + (cz - P[i, 2]) ** 2
+            dist2[q] = d2
             touch[q] = 1 if d2 < P[i, 9] * P[i, 9] else 0
             q += 1
             k += 1
@@ -426,6 +431,13 @@ def triangle_contacts(P, pairs, n, nw, tris):
                                             + (cp[a, 2] - cp[b, 2]) ** 2) <= tol2:
                     ok = False
                     break
+                if dist2[b] < dist2[a]:
+                    kb = k - (q - b)
+                    px, py, pz, _ = closest_point_triangle(
+                        cp[a, 0], cp[a, 1], cp[a, 2], triangle_image(tris.v, pairs.j[kb] - n - nw, pairs.shift, kb, image))
+                    if (px - cp[a, 0]) ** 2 + (py - cp[a, 1]) ** 2 + (pz - cp[a, 2]) ** 2 <= tol2:
+                        ok = False
+                        break
             active[a] = 1 if ok else 0
     return cp, active
 
