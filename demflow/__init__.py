@@ -2,7 +2,12 @@
 
 Scene → build → Simulation → results → analysis → report.
 """
-from .scene import (Box, ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene,
+import os
+
+# Before Numba is first imported: no SVML in compiled loops (it rounds per CPU; see demflow.jit and demflow.libm).
+os.environ.setdefault("NUMBA_DISABLE_INTEL_SVML", "1")
+
+from .scene import (Box, ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Phase, Scene,  # noqa: E402
                     SceneError, Servo, Superquadrics, UnsafeTimeStepWarning, EnergyBalanceWarning, PeriodicMeshWarning, Wall)
 from .build import build
 from .simulation import BlowUpError, Simulation

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from . import libm
 from .laws.hertz_mindlin import HertzMindlin
 from .laws.linear import Linear
 from .scene import SceneError, is_number, type_phrase
@@ -21,7 +22,7 @@ FAMILIES_3D = (Linear, HertzMindlin)
 def rayleigh_time_step(r: np.ndarray, mass: np.ndarray, young: np.ndarray, poisson: np.ndarray) -> float:
     """The Rayleigh-wave time step min πR√(ρ/G)/(0.1631ν + 0.8766) (Li et al. 2005; YADE's
     ``RayleighWaveTimeStep``), with ρ = m / (4/3 πR³) and G = E / 2(1 + ν) per sphere [time]."""
-    rho = mass / (4.0 / 3.0 * math.pi * r ** 3)
+    rho = mass / (4.0 / 3.0 * math.pi * libm.cube(r))
     G = young / (2.0 * (1.0 + poisson))
     return float(np.min(math.pi * r * np.sqrt(rho / G) / (0.1631 * poisson + 0.8766)))
 
@@ -406,7 +407,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
         mass = _array("scene.spheres.mass", s.mass, n)
     else:
         rho = np.array([scene.materials[m].density for m in mats])
-        mass = rho * 4.0 / 3.0 * math.pi * r ** 3
+        mass = rho * 4.0 / 3.0 * math.pi * libm.cube(r)
     if np.any(mass <= 0):
         k = int(np.argmax(mass <= 0))
         where = (f"scene.spheres.mass[{k}]" if s.mass is not None
@@ -451,7 +452,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
                              "give the spheres' material a finite Young's modulus")
         # members carry their clump's mass (for the dashpots): their density is the material's
         dens = np.array([scene.materials[m].density for m in mats], np.float64)
-        m_rho = np.where((fixed == 2) & (dens > 0), dens * 4.0 / 3.0 * math.pi * r ** 3, mass)
+        m_rho = np.where((fixed == 2) & (dens > 0), dens * 4.0 / 3.0 * math.pi * libm.cube(r), mass)
         dt_crit = rayleigh_time_step(r, m_rho, E, nu)
         how = "the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766)"
     else:

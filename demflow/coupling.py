@@ -45,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import libm
 from .bem.geometry import Boundary, Domain
 from .bem.solve import Problem
 
@@ -54,8 +55,8 @@ def wall_resistance(mu, r, d):
     4πμ/(α − tanh α) with cosh α = d/R (2D Stokes, exact for one wall; Jeffrey & Onishi 1981)
     [force/(length/time) per unit thickness].  Long-ranged (~4πμ/(ln(2d/R) − 1) far away) and
     3√2π μ (R/h)^{3/2} at a small gap h = d − R."""
-    a = np.arccosh(np.maximum(np.asarray(d, dtype=float) / r, 1.0 + 1e-12))
-    return 4.0 * math.pi * mu / (a - np.tanh(a))
+    a = libm.arccosh(np.maximum(np.asarray(d, dtype=float) / r, 1.0 + 1e-12))
+    return 4.0 * math.pi * mu / (a - libm.tanh(a))
 
 
 def side_distances(x, y, corners):
@@ -210,7 +211,7 @@ class FluidCoupler:
         holes = []
         for i in range(sim.n):
             th = -2 * np.pi * np.arange(st.n_disc) / st.n_disc
-            holes.append(Boundary(f"d{i}", np.column_stack([xs[i] + rp[i] * np.cos(th), ys[i] + rp[i] * np.sin(th)]),
+            holes.append(Boundary(f"d{i}", np.column_stack([xs[i] + rp[i] * libm.cos(th), ys[i] + rp[i] * libm.sin(th)]),
                                   True, center=(float(xs[i]), float(ys[i]))))
         return Domain([outer] + holes), rp, gw, dist
 

@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from . import libm
 from .build3d import (_array, _check_safe_step, _common_length, _law_family, _skin_and_box, _walls,
                       particle_materials, quat_to_matrix, rayleigh_time_step, time_step_laws)
 from .contacts.ellipsoids import WARM_COLUMNS
@@ -132,7 +133,7 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
             raise SceneError(f"ellipsoid {k} has material {mats[k]!r} with young={E[k]}: only a plane can be rigid; "
                              "give the ellipsoids' material a finite Young's modulus")
         # the Rayleigh time of a sphere of the smallest semi-axis and the material's density (conservative)
-        dt_crit = rayleigh_time_step(amin, rho * 4.0 / 3.0 * math.pi * amin ** 3, E, nu)
+        dt_crit = rayleigh_time_step(amin, rho * 4.0 / 3.0 * math.pi * libm.cube(amin), E, nu)
         how = "the Rayleigh-wave time πa_min√(ρ/G)/(0.1631ν + 0.8766)"
     else:
         kmax = max(max(law.kn, law.ks) for law in family.laws_by_pair.values())
@@ -183,7 +184,7 @@ def surface_mobility(axes, mass: float, moments) -> tuple[float, float]:
     eigenvalue over the tangent plane), times MOBILITY_MARGIN.  A sphere: (1/m, 1/m + R²/I) = (1/m, 3.5/m)."""
     a = np.asarray(axes, np.float64)
     th, ph = np.meshgrid(np.linspace(0.0, math.pi, 91), np.linspace(0.0, 2.0 * math.pi, 181), indexing="ij")
-    u = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1).reshape(-1, 3)
+    u = np.stack([libm.sin(th) * libm.cos(ph), libm.sin(th) * libm.sin(ph), libm.cos(th)], -1).reshape(-1, 3)
     r = u * a
     n = r / a ** 2
     n /= np.linalg.norm(n, axis=1)[:, None]

@@ -17,6 +17,7 @@ import math
 import numpy as np
 from numba import prange
 
+from . import libm
 from .jit import njit_parallel
 
 
@@ -37,7 +38,7 @@ def kissing_number(R: np.ndarray, r: float) -> np.ndarray:
     """How many discs of radius ``r`` can touch a disc of radius R without overlapping each other:
     ⌊π / arcsin(r/(R + r))⌋ (each subtends 2 arcsin(r/(R + r)) seen from the centre; 6 for equal
     discs).  A uniform relative overlap of every contact leaves the count unchanged."""
-    return np.floor(math.pi / np.arcsin(r / (R + r)) + 1e-9)
+    return np.floor(math.pi / libm.arcsin(r / (R + r)) + 1e-9)
 
 
 def safe_time_step(r: np.ndarray, mass: np.ndarray, inertia: np.ndarray, mat: np.ndarray, disc_laws: dict,

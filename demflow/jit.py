@@ -8,8 +8,16 @@ same scene, same seed, same results).
 from __future__ import annotations
 
 import os
+import warnings
 
 import numba
+
+# Numba vectorises loops of math calls through Intel's SVML when it finds the library (intel-cmplr-lib-rt), and SVML
+# rounds differently from libm and per CPU (demflow.libm); demflow/__init__.py asks it off before Numba is imported.
+if getattr(numba.config, "USING_SVML", False):
+    warnings.warn("Numba was imported before demflow with Intel's SVML in use: results may then differ between CPUs "
+                  "in the last bits; set NUMBA_DISABLE_INTEL_SVML=1 before importing numba", RuntimeWarning,
+                  stacklevel=2)
 
 JIT_FLAGS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
 

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import libm
+
 
 @dataclass
 class Boundary:
@@ -83,7 +85,7 @@ def circle(center, radius, n, name="particle", hole=True):
     th = 2 * np.pi * np.arange(n) / n
     if hole:
         th = -th
-    ends = np.column_stack([center[0] + radius * np.cos(th), center[1] + radius * np.sin(th)])
+    ends = np.column_stack([center[0] + radius * libm.cos(th), center[1] + radius * libm.sin(th)])
     return Boundary(name, ends, hole, center=tuple(center))
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import libm
 from ..jit import njit
 
 TABLE = 0
@@ -51,7 +52,7 @@ def log_gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
         a, b = 2.0 ** -(j + 1), 2.0 ** -j
         x = 0.5 * (a + b) + 0.5 * (b - a) * gx
         xs.append(x)
-        ws.append(0.5 * (b - a) * gw * np.log(1.0 / x))
+        ws.append(0.5 * (b - a) * gw * libm.log(1.0 / x))
     x = np.concatenate(xs)
     w = np.concatenate(ws)
     alpha = np.zeros(n)

@@ -66,7 +66,7 @@ def nine_disc_scene(name, *, kn, ks, phi_deg, speed, load_cycles, rest_cycles, z
     walls = box_walls(0.0, 300.0, 0.0, 300.0, half_length=(400.0, 250.0), counter_clockwise=False, phases=phases)
     cn = 2 * zeta * np.sqrt(MASS * kn)
     cs = 2 * zeta * np.sqrt(MASS * ks)
-    law = LinearLaw(kn=kn, ks=ks, cn=cn, cs=cs, friction=float(np.tan(np.radians(phi_deg))))
+    law = LinearLaw(kn=kn, ks=ks, cn=cn, cs=cs, friction=math.tan(math.radians(phi_deg)))
     x, y = lattice()
     n = load_cycles + hold
     return Scene(name=name, discs=Discs(x=x, y=y, radius=[R] * 9, material="disc"),
@@ -139,7 +139,7 @@ class NineDisc(Case):
                                                    load_cycles=120, **common)
         nd = p["distort_cycles"]
         dt = f * 2.0 * np.sqrt(MASS / 1.35e9)
-        omega = float(np.arctan(p["distort_gamma"]) / (nd * dt))
+        omega = math.atan(p["distort_gamma"]) / (nd * dt)
         for phi in (15, 30):
             for ratio, lab in ((2.0 / 3.0, "2/3"), (1.0, "1")):
                 key = f"distortion-phi{phi}-ks{lab.replace('/', 'of')}"

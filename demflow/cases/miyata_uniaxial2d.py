@@ -71,6 +71,7 @@ import math
 import numpy as np
 
 from ..scene import Box, ContactModel, LinearLaw, Material, Outputs, Phase, Scene, Superquadrics, Wall
+from .. import libm
 from ..shapes import superquadric as sq
 from .base import Case, CaseRun, Check
 
@@ -173,7 +174,7 @@ def top_height(sim) -> float:
 
 def surface(x: np.ndarray, rough: bool) -> np.ndarray:
     """The trimming height: z0 (smooth) or eq 60, z0 + a sin(2πx/L) (rough) [m]."""
-    return Z0 + (ROUGH_A * np.sin(2.0 * math.pi * x / ROUGH_L) if rough else 0.0)
+    return Z0 + (ROUGH_A * libm.sin(2.0 * math.pi * np.asarray(x) / ROUGH_L) if rough else 0.0)
 
 
 def _state(sim, keep=None):

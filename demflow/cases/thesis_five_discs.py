@@ -17,6 +17,8 @@ and tangential components (they reproduce with that reading).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..scene import Discs, GlobalDamping, LinearLaw, Material, Outputs, Scene, Wall
@@ -125,7 +127,7 @@ class FiveDiscs(Case):
             "frictionless-stiff": self._scene("five-discs-frictionless-stiff", 1e7 * s, 0.0, 1e5 * s ** 0.5, 0.0,
                                               4.5e5 * s ** 0.5, 0.0, 0.0, p["dt"] / s ** 0.5, p["t_end"]),
             "friction": self._scene("five-discs-friction", 1e7, 7e6, 1e5, 7e4, 4.5e5, 4.5e5,
-                                    float(np.tan(np.radians(15.0))), p["dt"], p["t_end"]),
+                                    math.tan(math.radians(15.0)), p["dt"], p["t_end"]),
         }
 
     def checks(self, run, p):
