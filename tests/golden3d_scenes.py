@@ -4,6 +4,12 @@ Written by ``python tests/golden3d_scenes.py`` at the commit named in the file's
 before any optimisation of the 3D kernels.  A refactoring guard, not validation: it says "the code
 computes exactly what it computed then", to the bit.  Regenerate it only for a change of physics
 that is meant to change results, and say so in the commit.
+
+bed3d.npz was re-recorded once without a change of physics (2026-11-26, at the commit that added
+demflow.libm): the file of 97ffa77 held sphere masses from numpy's ``r ** 3``, which numpy computes with SVML on
+the AVX-512 host that wrote it and with libm elsewhere, so the test failed on an AVX2-only host at every commit.
+The code at that commit gives, on the AVX2-only host, the same bits as the code before it (36d6a24) gave there, and
+no longer uses numpy's CPU-specific functions (tests/test_libm.py).
 """
 from __future__ import annotations
 
