@@ -29,3 +29,16 @@ def test_golden3d_ellipsoid_bits():
     _, got = g3.run("ell3d")
     with np.load(g3.GOLDEN / "ell3d.npz", allow_pickle=False) as want:
         assert_same_bits("ell3d", got, want)
+
+
+def test_ellipsoid_pair_geometry_bits():
+    """The Lin & Ng pair geometry, every output to the bit on 3000 configurations (cold and warm starts, the
+    fallback): tests/golden_ellipsoid_pairs.py, written before the geometry was computed lane by lane."""
+    import golden_ellipsoid_pairs as gp
+
+    conf = gp.configurations()
+    got = gp.outputs(*conf)
+    with np.load(gp.GOLDEN, allow_pickle=False) as want:
+        for key in ("cold", "warm", "moved"):
+            same = (got[key] == want[key]) | (np.isnan(got[key]) & np.isnan(want[key]))
+            assert same.all(), f"{key}: {int((~same).sum())} outputs differ, first at {np.argwhere(~same)[0]}"
