@@ -1,13 +1,17 @@
-"""Is the stress drop of the ellipsoid full bed a time-step artefact?  Rerun its loading at another Δt.
+"""Does the ellipsoid full bed's loading depend on Δt, on the plate speed or on the local damping?  Rerun the
+loading (only the loading) from the very bed the page loaded, with one of them changed.
 
-    python benchmarks/uniaxial3d_loading_dt.py [--dt-fraction 0.1] [--out /tmp/uniaxial3d-dt]
+    python benchmarks/uniaxial3d_loading_dt.py [--dt-fraction 0.1] [--plate-speed 0.04] [--local-damping 0.0]
+                                               [--out /tmp/uniaxial3d-dt]
 
 Needs the settled beds of ``demflow validate --case miyata-uniaxial-3d-ellipsoids-full`` (its checkpoints under
-.demflow/checkpoints/): their settle1/settle2 states are copied into a fresh checkpoint directory for the given
-``dt_fraction``, so the loading (and only the loading) runs from the very bed the page loaded, at the new Δt.
-Prints, for the page's run and for the rerun, the largest drop of the plate stress from its running maximum
-(where and how large) and the settlements at 100 and 400 kPa; the rerun's curve goes to OUT/curve.parquet.
-Run on 2026-11-25 with --dt-fraction 0.1 (1753 s, one core): see README, miyata-uniaxial-3d-ellipsoids-full.
+.demflow/checkpoints/): their settle1/settle2 states are copied into a fresh checkpoint directory for the changed
+parameters, so the loading runs from the page's bed.  Prints, for the page's run and for the rerun, the largest drop
+of the plate stress from its running maximum (where and how large), the settlements at 100 and 400 kPa, and the
+seed's statements judged as on the page (Figs 32, 33, 35 and 37: :func:`seed_statement_checks`); the rerun's curve
+goes to OUT/curve.parquet.  A changed local damping applies to the loading only (the settled bed is the page's).
+Results: benchmarks/results/uniaxial3d_loading_dt.txt (Δt) and uniaxial3d_loading_rerun.txt (plate speed, local
+damping); see README, miyata-uniaxial-3d-ellipsoids-full.
 """
 from __future__ import annotations
 
@@ -22,7 +26,7 @@ from pathlib import Path
 import pandas as pd
 
 from demflow.cases import get_case
-from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints, protocol_run
+from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints, protocol_run, seed_statement_checks
 
 CASE = "miyata-uniaxial-3d-ellipsoids-full"
 
@@ -37,21 +41,39 @@ def largest_drop(c: pd.DataFrame) -> str:
             f"settlement at 100 / 400 kPa {1e3 * at[100e3]:.1f} / {1e3 * at[400e3]:.1f} mm")
 
 
+def statements(curve: pd.DataFrame, snaps, area: float) -> str:
+    """The seed's statements (the page's checks of them) on a loading: one line each, PASS/MISS and its text."""
+    checks = seed_statement_checks({"curve": curve, "snapshots": snaps, "area": area})
+    return "\n".join(f"    {'PASS' if c.passed else 'MISS'} {c.name}" for c in checks)
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--dt-fraction", type=float, default=0.1)
+    ap.add_argument("--dt-fraction", type=float, default=None, help="(default: the case's, 0.2)")
+    ap.add_argument("--plate-speed", type=float, default=None, help="[m/s] (default: the case's, 0.02)")
+    ap.add_argument("--local-damping", type=float, default=None, help="during the loading (default: the case's, 0.3)")
     ap.add_argument("--out", default="/tmp/uniaxial3d-dt")
     a = ap.parse_args()
     warnings.simplefilter("ignore")
     case = get_case(CASE)
-    page = ProtocolCheckpoints(case.params["checkpoint_dir"], case.merged())
+    page_p = case.merged()
+    page = ProtocolCheckpoints(case.params["checkpoint_dir"], page_p)
     done = sorted(glob.glob(str(page.path("loading-*.pkl"))))
     if not (page.path("settle2.done").exists() and done):
         raise SystemExit(f"no completed run in {page.dir}: run 'demflow validate --case {CASE}' first")
     with open(done[-1], "rb") as f:
-        print("page's run:", largest_drop(pd.DataFrame(pickle.load(f)["rows"])))
+        st = pickle.load(f)
+    curve = pd.DataFrame(st["rows"])
+    area = float(page_p["box"]) ** 2
+    print(f"page's run (dt_fraction {page_p['dt_fraction']}, plate speed {page_p['plate_speed']} m/s, local damping "
+          f"{page_p['local_damping']}):", largest_drop(curve))
+    print(statements(curve, st["snaps"], area))
     out = Path(a.out)
-    p = case.merged({"dt_fraction": a.dt_fraction, "checkpoint_dir": str(out / "checkpoints")})
+    change = {"checkpoint_dir": str(out / "checkpoints")}
+    for key, v in (("dt_fraction", a.dt_fraction), ("plate_speed", a.plate_speed), ("local_damping", a.local_damping)):
+        if v is not None:
+            change[key] = v
+    p = case.merged(change)
     new = ProtocolCheckpoints(p["checkpoint_dir"], p)
     new.dir.mkdir(parents=True, exist_ok=True)
     for name in ("settle1.npz", "settle1.done", "settle2.npz", "settle2.done"):
@@ -59,8 +81,9 @@ def main():
     t = time.perf_counter()
     run = protocol_run(p)
     run["curve"].to_parquet(out / "curve.parquet")
-    print(f"rerun at dt_fraction {a.dt_fraction} (dt {run['dt']:.4g} s, {time.perf_counter() - t:.0f} s):",
-          largest_drop(run["curve"]))
+    print(f"rerun at dt_fraction {p['dt_fraction']}, plate speed {p['plate_speed']} m/s, local damping "
+          f"{p['local_damping']} (dt {run['dt']:.4g} s, {time.perf_counter() - t:.0f} s):", largest_drop(run["curve"]))
+    print(statements(run["curve"], run["snapshots"], run["area"]))
 
 
 if __name__ == "__main__":
