@@ -3,6 +3,7 @@ loading (only the loading) from the very bed the page loaded, with one of them c
 
     python benchmarks/uniaxial3d_loading_dt.py [--dt-fraction 0.1] [--plate-speed 0.04] [--local-damping 0.0]
                                                [--out /tmp/uniaxial3d-dt]
+    python benchmarks/uniaxial3d_loading_dt.py --seed 2 [--out ...]   # the whole protocol on another seed's bed
 
 Needs the settled beds of ``demflow validate --case miyata-uniaxial-3d-ellipsoids-full`` (its checkpoints under
 .demflow/checkpoints/): their settle1/settle2 states are copied into a fresh checkpoint directory for the changed
@@ -10,6 +11,7 @@ parameters, so the loading runs from the page's bed.  Prints, for the page's run
 of the plate stress from its running maximum (where and how large), the settlements at 100 and 400 kPa, and the
 seed's statements judged as on the page (Figs 32, 33, 35 and 37: :func:`seed_statement_checks`); the rerun's curve
 goes to OUT/curve.parquet.  A changed local damping applies to the loading only (the settled bed is the page's).
+``--seed`` instead runs the whole protocol (insertion, settling, trim, loading) for another seed: a different bed.
 Results: benchmarks/results/uniaxial3d_loading_dt.txt (Δt) and uniaxial3d_loading_rerun.txt (plate speed, local
 damping); see README, miyata-uniaxial-3d-ellipsoids-full.
 """
@@ -44,7 +46,7 @@ def largest_drop(c: pd.DataFrame) -> str:
 def statements(curve: pd.DataFrame, snaps, area: float) -> str:
     """The seed's statements (the page's checks of them) on a loading: one line each, PASS/MISS and its text."""
     checks = seed_statement_checks({"curve": curve, "snapshots": snaps, "area": area})
-    return "\n".join(f"    {'PASS' if c.passed else 'MISS'} {c.name}" for c in checks)
+    return "\n".join(f"    {'PASS' if c.passed else 'MISS'} {c.name} [value {c.value:.4g}]" for c in checks)
 
 
 def main():
@@ -52,6 +54,7 @@ def main():
     ap.add_argument("--dt-fraction", type=float, default=None, help="(default: the case's, 0.2)")
     ap.add_argument("--plate-speed", type=float, default=None, help="[m/s] (default: the case's, 0.02)")
     ap.add_argument("--local-damping", type=float, default=None, help="during the loading (default: the case's, 0.3)")
+    ap.add_argument("--seed", type=int, default=None, help="the whole protocol on this seed's bed (no loading rerun)")
     ap.add_argument("--out", default="/tmp/uniaxial3d-dt")
     a = ap.parse_args()
     warnings.simplefilter("ignore")
@@ -73,15 +76,19 @@ def main():
     for key, v in (("dt_fraction", a.dt_fraction), ("plate_speed", a.plate_speed), ("local_damping", a.local_damping)):
         if v is not None:
             change[key] = v
+    if a.seed is not None:
+        change["seed"] = a.seed
     p = case.merged(change)
     new = ProtocolCheckpoints(p["checkpoint_dir"], p)
     new.dir.mkdir(parents=True, exist_ok=True)
-    for name in ("settle1.npz", "settle1.done", "settle2.npz", "settle2.done"):
-        shutil.copy(page.path(name), new.path(name))
+    if a.seed is None:  # the loading only, from the page's settled bed
+        for name in ("settle1.npz", "settle1.done", "settle2.npz", "settle2.done"):
+            shutil.copy(page.path(name), new.path(name))
     t = time.perf_counter()
     run = protocol_run(p)
     run["curve"].to_parquet(out / "curve.parquet")
-    print(f"rerun at dt_fraction {p['dt_fraction']}, plate speed {p['plate_speed']} m/s, local damping "
+    what = f"seed {a.seed} (the whole protocol: {run['n_particles']} particles kept)" if a.seed is not None else "rerun"
+    print(f"{what} at dt_fraction {p['dt_fraction']}, plate speed {p['plate_speed']} m/s, local damping "
           f"{p['local_damping']} (dt {run['dt']:.4g} s, {time.perf_counter() - t:.0f} s):", largest_drop(run["curve"]))
     print(statements(run["curve"], run["snapshots"], run["area"]))
 
