@@ -1,0 +1,135 @@
+"""How large must the periodic box be for the plate's stress-settlement curve to rise monotonically?  (Issue 14:
+the reduced `miyata-uniaxial-3d` variant is left out of the default validate because in its 2 x 2 m box the
+curve's monotone check fails.)
+
+    python benchmarks/uniaxial3d_box_study.py --boxes 2 3 4 --seeds 1 2 3 [--shape clumps] [--out /tmp/box-study]
+
+Runs the case's whole protocol (:func:`demflow.cases.miyata_uniaxial3d.protocol_run`: insertion, settling, trim at
+2.0 m, loading at 2 cm/s to 600 kPa) for each box side and seed, one seed at a time on one core, with the number
+of inserted particles scaled with the box's area (the reduced variant's 80 per 4 m^2; every other parameter the
+case's).  Prints one row per run: particles kept, particles on the plate at 100 and 400 kPa, the case's own
+monotone check (21 equally spaced settlements), the largest drop of the plate stress below its running maximum
+(absolute, and relative to that maximum) and where it came, the number of drops deeper than 5 % of the running
+maximum (all, and those once it is past 100 kPa), and the compute time.  Each run's curve goes to
+OUT/box<L>-seed<S>.parquet; ``--summarise`` prints the rows again from those files, ``--engines`` adds the stored
+YADE and LIGGGHTS runs of the reduced variant.  Results:
+benchmarks/results/uniaxial3d_box_study.txt; see README, miyata-uniaxial-3d.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from demflow.cases import get_case
+from demflow.cases.miyata_uniaxial3d import protocol_run
+
+PER_M2 = 80 / 4.0  # the reduced variant's insertion density
+DEEP = 0.05  # a drop deeper than this fraction of the running maximum is counted
+
+
+def monotone_21(c: pd.DataFrame) -> tuple[bool, float]:
+    """The case's check (MiyataUniaxial3D.checks): the plate stress at 21 equally spaced settlements never falls."""
+    on = c[c.settlement > 0]
+    grid = np.linspace(on.settlement.min(), on.settlement.max(), 21)
+    sig = np.interp(grid, on.settlement.to_numpy(), on.plate_stress.to_numpy())
+    d = np.diff(sig)
+    return bool(np.all(d >= 0)), float(d.min())
+
+
+def _episodes(flag: np.ndarray) -> int:
+    return int(np.sum(flag[1:] & ~flag[:-1]) + (flag[0] if flag.size else 0))
+
+
+def drops(c: pd.DataFrame) -> dict:
+    """The deepest fall of the plate stress below its running maximum, how many separate falls exceed DEEP of it,
+    and how many of those come once the running maximum is past 100 kPa (the seed's transitional and final regimes)."""
+    s = c.plate_stress.to_numpy()
+    run_max = np.maximum.accumulate(s)
+    dd = run_max - s
+    i = int(np.argmax(dd))
+    j = int(np.argmax(s[:i + 1]))
+    rel = np.where(run_max > 0, dd / np.where(run_max > 0, run_max, 1.0), 0.0)
+    deep = rel > DEEP
+    return {"drop_kpa": dd[i] / 1e3, "drop_rel": rel[i], "from_kpa": s[j] / 1e3, "at_mm": 1e3 * float(c.settlement.iloc[j]),
+            "n_deep": _episodes(deep), "n_deep_100": _episodes(deep & (run_max >= 100e3))}
+
+
+def row(label: str, c: pd.DataFrame, kept, seconds=None) -> str:
+    mono, dmin = monotone_21(c)
+    d = drops(c)
+    return (f"{label} | {kept} | {plate_count(c, 100e3):.0f} / {plate_count(c, 400e3):.0f} | "
+            f"{'yes' if mono else 'no'} ({dmin / 1e3:+.1f}) | {d['drop_kpa']:.1f} ({100 * d['drop_rel']:.0f} %) "
+            f"from {d['from_kpa']:.0f} at {d['at_mm']:.0f} | {d['n_deep']} / {d['n_deep_100']} | "
+            f"{'' if seconds is None else f'{seconds:.0f}'}")
+
+
+HEADER = ("run | kept | plate particles at 100 / 400 kPa | monotone (21 samples; min step kPa) | "
+          "largest drop kPa (rel.) from kPa at mm | drops > 5 % (all / past 100 kPa) | compute s")
+
+
+def engines() -> None:
+    """The same numbers for the stored YADE and LIGGGHTS runs of the reduced variant (2 x 2 m box)."""
+    from demflow.engines import reference
+
+    root = reference.root() / "miyata-uniaxial-3d"
+    for f in sorted(root.glob("seed*/*/curve.parquet")):
+        print(row(f"2 m, {f.parent.name} {f.parent.parent.name}", pd.read_parquet(f), "-"))
+
+
+def plate_count(c: pd.DataFrame, level: float) -> float:
+    k = int((c.plate_stress >= level).to_numpy().argmax())
+    return float(c.plate_contacts.iloc[k])
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--boxes", type=float, nargs="*", default=[2.0, 3.0, 4.0])
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
+    ap.add_argument("--shape", default="clumps", choices=("clumps", "ellipsoids"))
+    ap.add_argument("--out", default="/tmp/box-study")
+    ap.add_argument("--engines", action="store_true", help="also the stored YADE and LIGGGHTS runs (2 x 2 m box)")
+    ap.add_argument("--summarise", action="store_true", help="only print the rows of the runs already in OUT")
+    ap.add_argument("--also", nargs="*", default=[], help="rows for other loading curves too: a curve.parquet (as "
+                    "uniaxial3d_loading_dt.py writes) or a loading-*.pkl checkpoint of a full page")
+    a = ap.parse_args()
+    warnings.simplefilter("ignore")
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    case = get_case("miyata-uniaxial-3d")
+    print(f"shape {a.shape}; {PER_M2:g} inserted per m^2; a deep drop is one below {100 * DEEP:g} % of the running max")
+    print(HEADER)
+    if a.engines:
+        engines()
+    for path in a.also:
+        if path.endswith(".pkl"):
+            import pickle
+
+            with open(path, "rb") as fh:
+                c = pd.DataFrame(pickle.load(fh)["rows"])
+        else:
+            c = pd.read_parquet(path)
+        print(row(path, c, "-"))
+    for box in a.boxes:
+        for seed in a.seeds:
+            f = out / f"box{box:g}-seed{seed}.parquet"
+            if a.summarise:
+                if f.exists():
+                    print(row(f"{box:g} m, seed {seed}", pd.read_parquet(f), "-"), flush=True)
+                continue
+            n = int(round(PER_M2 * box * box))
+            p = case.merged({"box": box, "n_insert": n, "seed": seed, "shape": a.shape, "band_seeds": 1,
+                             "engine_refs": 0, "undamped_band": 0, "progress": False,
+                             "checkpoint_dir": str(out / "checkpoints")})
+            t = time.perf_counter()
+            r = protocol_run(p)
+            r["curve"].to_parquet(f)
+            print(row(f"{box:g} m, seed {seed}", r["curve"], r["n_particles"], time.perf_counter() - t), flush=True)
+
+
+if __name__ == "__main__":
+    main()
