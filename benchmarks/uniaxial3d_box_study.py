@@ -18,6 +18,7 @@ benchmarks/results/uniaxial3d_box_study.txt; see README, miyata-uniaxial-3d.
 from __future__ import annotations
 
 import argparse
+import pickle
 import time
 import warnings
 from pathlib import Path
@@ -26,45 +27,25 @@ import numpy as np
 import pandas as pd
 
 from demflow.cases import get_case
-from demflow.cases.miyata_uniaxial3d import protocol_run
+from demflow.cases.miyata_uniaxial3d import monotone_steps, protocol_run, stress_falls
 
 PER_M2 = 80 / 4.0  # the reduced variant's insertion density
 DEEP = 0.05  # a drop deeper than this fraction of the running maximum is counted
 
 
-def monotone_21(c: pd.DataFrame) -> tuple[bool, float]:
-    """The case's check (MiyataUniaxial3D.checks): the plate stress at 21 equally spaced settlements never falls."""
-    on = c[c.settlement > 0]
-    grid = np.linspace(on.settlement.min(), on.settlement.max(), 21)
-    sig = np.interp(grid, on.settlement.to_numpy(), on.plate_stress.to_numpy())
-    d = np.diff(sig)
-    return bool(np.all(d >= 0)), float(d.min())
-
-
-def _episodes(flag: np.ndarray) -> int:
-    return int(np.sum(flag[1:] & ~flag[:-1]) + (flag[0] if flag.size else 0))
-
-
-def drops(c: pd.DataFrame) -> dict:
-    """The deepest fall of the plate stress below its running maximum, how many separate falls exceed DEEP of it,
-    and how many of those come once the running maximum is past 100 kPa (the seed's transitional and final regimes)."""
-    s = c.plate_stress.to_numpy()
-    run_max = np.maximum.accumulate(s)
-    dd = run_max - s
-    i = int(np.argmax(dd))
-    j = int(np.argmax(s[:i + 1]))
-    rel = np.where(run_max > 0, dd / np.where(run_max > 0, run_max, 1.0), 0.0)
-    deep = rel > DEEP
-    return {"drop_kpa": dd[i] / 1e3, "drop_rel": rel[i], "from_kpa": s[j] / 1e3, "at_mm": 1e3 * float(c.settlement.iloc[j]),
-            "n_deep": _episodes(deep), "n_deep_100": _episodes(deep & (run_max >= 100e3))}
+def plate_count(c: pd.DataFrame, level: float) -> float:
+    k = int((c.plate_stress >= level).to_numpy().argmax())
+    return float(c.plate_contacts.iloc[k])
 
 
 def row(label: str, c: pd.DataFrame, kept, seconds=None) -> str:
-    mono, dmin = monotone_21(c)
-    d = drops(c)
+    steps = monotone_steps(c)
+    d = stress_falls(c, DEEP, 100e3)
+    k = d["i_from"]
     return (f"{label} | {kept} | {plate_count(c, 100e3):.0f} / {plate_count(c, 400e3):.0f} | "
-            f"{'yes' if mono else 'no'} ({dmin / 1e3:+.1f}) | {d['drop_kpa']:.1f} ({100 * d['drop_rel']:.0f} %) "
-            f"from {d['from_kpa']:.0f} at {d['at_mm']:.0f} | {d['n_deep']} / {d['n_deep_100']} | "
+            f"{'yes' if np.all(steps >= 0) else 'no'} ({steps.min() / 1e3:+.1f}) | {d['fall'] / 1e3:.1f} "
+            f"({100 * d['rel']:.0f} %) from {c.plate_stress.iloc[k] / 1e3:.0f} at {1e3 * c.settlement.iloc[k]:.0f} | "
+            f"{d['n_deep']} / {d['n_deep_past']} | "
             f"{'' if seconds is None else f'{seconds:.0f}'}")
 
 
@@ -79,11 +60,6 @@ def engines() -> None:
     root = reference.root() / "miyata-uniaxial-3d"
     for f in sorted(root.glob("seed*/*/curve.parquet")):
         print(row(f"2 m, {f.parent.name} {f.parent.parent.name}", pd.read_parquet(f), "-"))
-
-
-def plate_count(c: pd.DataFrame, level: float) -> float:
-    k = int((c.plate_stress >= level).to_numpy().argmax())
-    return float(c.plate_contacts.iloc[k])
 
 
 def main():
@@ -107,8 +83,6 @@ def main():
         engines()
     for path in a.also:
         if path.endswith(".pkl"):
-            import pickle
-
             with open(path, "rb") as fh:
                 c = pd.DataFrame(pickle.load(fh)["rows"])
         else:

@@ -28,17 +28,17 @@ from pathlib import Path
 import pandas as pd
 
 from demflow.cases import get_case
-from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints, protocol_run, seed_statement_checks
+from demflow.cases.miyata_uniaxial3d import (ProtocolCheckpoints, protocol_run, seed_statement_checks,
+                                             stress_falls)
 
 CASE = "miyata-uniaxial-3d-ellipsoids-full"
 
 
 def largest_drop(c: pd.DataFrame) -> str:
-    dd = c.plate_stress.cummax() - c.plate_stress
-    i = dd.idxmax()
-    j = c.plate_stress[:i + 1].idxmax()
+    d = stress_falls(c)
+    i, j = d["i_to"], d["i_from"]
     at = {lev: float(c.settlement[(c.plate_stress >= lev).idxmax()]) for lev in (100e3, 400e3)}
-    return (f"largest drop {dd[i] / 1e3:.1f} kPa: {c.plate_stress[j] / 1e3:.1f} kPa at step {int(c.step[j])} "
+    return (f"largest drop {d['fall'] / 1e3:.1f} kPa: {c.plate_stress[j] / 1e3:.1f} kPa at step {int(c.step[j])} "
             f"(settlement {1e3 * c.settlement[j]:.1f} mm) to {c.plate_stress[i] / 1e3:.1f} kPa at step {int(c.step[i])}; "
             f"settlement at 100 / 400 kPa {1e3 * at[100e3]:.1f} / {1e3 * at[400e3]:.1f} mm")
 

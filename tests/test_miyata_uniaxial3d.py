@@ -244,3 +244,21 @@ def test_the_ellipsoid_full_variant_is_the_full_protocol_with_the_seeds_particle
     assert ell.params["box"] == 10.0 and ell.params["n_insert"] == 1500
     assert ProtocolCheckpoints(tmp_path, full.merged()).dir != ProtocolCheckpoints(tmp_path, ell.merged()).dir
     assert any(a.startswith("Δt = 0.2 × the Rayleigh step of the smallest semi-axis") for a in ell.assumptions)
+
+
+def test_monotone_steps_and_stress_falls_on_a_hand_made_curve():
+    """The monotone check's samples and the falls below the running maximum, on a curve worked by hand."""
+    import pandas as pd
+
+    from demflow.cases.miyata_uniaxial3d import monotone_steps, stress_falls
+
+    c = pd.DataFrame({"settlement": [0.0, 1.0, 2.0, 3.0, 4.0, 5.0], "plate_stress": [0.0, 10.0, 20.0, 15.0, 30.0, 5.0]})
+    # settlements 1..5 sampled at 5 points: the records themselves
+    assert monotone_steps(c, samples=5).tolist() == [10.0, -5.0, 15.0, -25.0]
+    d = stress_falls(c, deep=0.05, past=25.0)
+    assert (d["fall"], d["i_from"], d["i_to"]) == (25.0, 4, 5)
+    assert d["rel"] == 25.0 / 30.0
+    assert d["n_deep"] == 2  # 20 -> 15 and 30 -> 5
+    assert d["n_deep_past"] == 1  # only the second starts from a maximum >= 25
+    rising = c.assign(plate_stress=[0.0, 1.0, 2.0, 3.0, 4.0, 5.0])
+    assert stress_falls(rising)["n_deep"] == 0 and (monotone_steps(rising) >= 0).all()

@@ -319,6 +319,33 @@ def cluster_bootstrap(snaps, wall: str, statistic, n_resamples: int, level: floa
     return float(res.confidence_interval.low), float(res.confidence_interval.high)
 
 
+def monotone_steps(curve, samples: int = 21) -> np.ndarray:
+    """Changes [Pa] of the plate stress between ``samples`` equally spaced settlements from the first touch to the
+    end (the case's monotone check: none may be negative)."""
+    on = curve[curve.settlement > 0]
+    grid = np.linspace(on.settlement.min(), on.settlement.max(), samples)
+    return np.diff(np.interp(grid, on.settlement.to_numpy(), on.plate_stress.to_numpy()))
+
+
+def stress_falls(curve, deep: float = 0.05, past: float = 100e3) -> dict:
+    """Falls of the plate stress below its running maximum, record by record: the deepest (``fall`` [Pa], ``rel``
+    to the maximum it fell from, ``i_from`` / ``i_to`` the positions of that maximum and of the bottom), and how many
+    separate falls go deeper than ``deep`` of the running maximum (``n_deep``), and of those, how many come once
+    that maximum is past ``past`` [Pa] (``n_deep_past``)."""
+    s = curve.plate_stress.to_numpy()
+    run_max = np.maximum.accumulate(s)
+    dd = run_max - s
+    i = int(np.argmax(dd))
+    rel = np.where(run_max > 0, dd / np.where(run_max > 0, run_max, 1.0), 0.0)
+    flag = rel > deep
+
+    def episodes(f):
+        return int(np.sum(f[1:] & ~f[:-1]) + (f[0] if f.size else 0))
+
+    return {"fall": float(dd[i]), "rel": float(rel[i]), "i_from": int(np.argmax(s[:i + 1])), "i_to": i,
+            "n_deep": episodes(flag), "n_deep_past": episodes(flag & (run_max >= past))}
+
+
 def first_reach(curve, stress: float) -> float:
     """Settlement [m] where the plate stress first reaches ``stress`` [Pa] (nan if it never does)."""
     hit = curve[curve.plate_stress >= stress]
@@ -688,10 +715,9 @@ class MiyataUniaxial3D(Case):
         out = [Check.against(f"floor stress after settling vs total weight / area ({ex['n_particles']} particles) [Pa]",
                              ex["floor_settled"] / A, ex["weight"] / A, "miyata3d.self-weight", SRC)]
         on = c[c.settlement > 0]
-        grid = np.linspace(on.settlement.min(), on.settlement.max(), 21)
-        sig = np.interp(grid, on.settlement.to_numpy(), on.plate_stress.to_numpy())
+        steps = monotone_steps(c)
         out.append(Check.condition("plate stress rises with settlement (21 equally spaced settlements)",
-                                   bool(np.all(np.diff(sig) >= 0)), float(np.min(np.diff(sig))), SRC,
+                                   bool(np.all(steps >= 0)), float(np.min(steps)), SRC,
                                    "The seed's stress-settlement curve rises through three regimes.",
                                    kind="self-consistency"))
         for level in (100e3, 400e3):
