@@ -149,40 +149,75 @@ def safe_time_step_3d(r: np.ndarray, mass: np.ndarray, mat: np.ndarray, pair_law
                           partners=partners)
 
 
+# Columns of the packed per-disc rows Q (n, 16) the step reads and writes besides P: what the force sums and the
+# update of a disc need, one 64-byte line, then the sums it writes (see :func:`pack_state`).
+Q_TH, Q_MASS, Q_INERTIA, Q_C, Q_CR, Q_XREF, Q_YREF, Q_INV_R2, Q_FX, Q_FY, Q_M = range(11)
+Q_WIDTH = 16
+
+
 @njit_parallel
-def sum_and_integrate(d, P, start, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
+def pack_state(d, Q):
+    """Fill the rows Q (n, 16) from discs ``d`` (slot order): (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M,
+    0, ...), the columns Q_* of this module.  With P (:func:`demflow.contacts.forces.pack_discs`) they are the
+    state :func:`sum_and_integrate` advances: two rows per disc instead of sixteen arrays."""
+    th, mass, inertia, C, Cr, xref, yref, r, Fx, Fy, M = (d.th, d.mass, d.inertia, d.C, d.Cr, d.xref, d.yref, d.r,
+                                                          d.Fx, d.Fy, d.M)
+    for i in prange(th.shape[0]):
+        Q[i, Q_TH] = th[i]
+        Q[i, Q_MASS] = mass[i]
+        Q[i, Q_INERTIA] = inertia[i]
+        Q[i, Q_C] = C[i]
+        Q[i, Q_CR] = Cr[i]
+        Q[i, Q_XREF] = xref[i]
+        Q[i, Q_YREF] = yref[i]
+        Q[i, Q_INV_R2] = 1.0 / (r[i] * r[i])
+        Q[i, Q_FX] = Fx[i]
+        Q[i, Q_FY] = Fy[i]
+        Q[i, Q_M] = M[i]
+        for c in range(Q_M + 1, Q.shape[1]):
+            Q[i, c] = 0.0
+
+
+@njit_parallel
+def unpack_state(P, Q, x, y, vx, vy, om, th, Fx, Fy, M):
+    """Write the rows P and Q back into the disc arrays (slot order) the step advanced: x, y, v, ω, θ and the
+    force sums of the last step (the arrays are passed one by one: see :mod:`demflow.jit`)."""
+    for i in prange(P.shape[0]):
+        x[i] = P[i, 0]
+        y[i] = P[i, 1]
+        vx[i] = P[i, 2]
+        vy[i] = P[i, 3]
+        om[i] = P[i, 4]
+        th[i] = Q[i, Q_TH]
+        Fx[i] = Q[i, Q_FX]
+        Fy[i] = Q[i, Q_FY]
+        M[i] = Q[i, Q_M]
+
+
+@njit_parallel
+def sum_and_integrate(Q, P, start, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
-    ``d`` (:class:`~demflow.state.Discs`, slot order).  Each disc sums its contacts in CSR order,
-    entries start[i]..start[i+1]: f[e] = (fx, fy, Fs·R), the contact's force on this disc and its
-    moment, written there by :func:`demflow.contacts.forces.pair_forces` (the other disc's share
-    is the negated force, so the sums equal those of f_finder subtracted, to the bit).  The update is thesis eqs 2.27-2.30 (see the module docstring); the new
-    x, y, v, ω are also written to the packed rows P (see :func:`demflow.contacts.forces.pack_discs`),
-    the contact sums to d.Fx, d.Fy, d.M.  With ``has_ext`` the external force and moment
-    ``ext[ext_perm[i]]`` = (fx, fy, m) (the fluid force, moment and buoyancy of a saturated scene,
-    thesis §3.4 and eq 4.39, in disc order, ``ext_perm`` mapping slot to disc) is added to disc i's
-    sums; without it ``ext`` is not read.  Returns the largest squared displacement since
-    (xref, yref) and the largest squared displacement of this step in radii ((|v|Δt/R)², a disc
-    that jumps a large part of its radius in one step can pass through a contact unseen).
-    diss[i] += the energy disc i's global damping dissipated in the step, (C v̄² + C* ω̄²)Δt with
+    The discs (slot order) are the packed rows P (x, y, vx, vy, ω, R, material, 0;
+    :func:`demflow.contacts.forces.pack_discs`) and Q (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M;
+    :func:`pack_state`): per disc two rows, so the pass reads and writes a few cache lines instead of sixteen
+    arrays (benchmarks/results/speed2d_inprocess_ab.md).  Each disc sums its contacts
+    in CSR order, entries start[i]..start[i+1]: f[e] = (fx, fy, Fs·R), the contact's force on this disc and
+    its moment, written there by :func:`demflow.contacts.forces.pair_forces` (the other disc's share
+    is the negated force, so the sums equal those of f_finder subtracted, to the bit).  The update is thesis
+    eqs 2.27-2.30 (see the module docstring); the new x, y, v, ω go to P, θ and the contact sums to Q.
+    With ``has_ext`` the external force and moment ``ext[ext_perm[i]]`` = (fx, fy, m) (the fluid force,
+    moment and buoyancy of a saturated scene, thesis §3.4 and eq 4.39, in disc order, ``ext_perm`` mapping
+    slot to disc) is added to disc i's sums; without it ``ext`` is not read.  Returns the largest squared
+    displacement since (x_ref, y_ref) and the largest squared displacement of this step in radii
+    ((|v|Δt)²·(1/R²), a disc that jumps a large part of its radius in one step can pass through a contact
+    unseen).  diss[i] += the energy disc i's global damping dissipated in the step, (C v̄² + C* ω̄²)Δt with
     v̄ = (v_{i-1/2} + v_{i+1/2})/2 (exactly what the centred dashpot of eq 2.27 removes from ½mv²).
     """
-    # fields are read into local names before the prange loop: Numba (0.68) loses writes made
-    # through a namedtuple's field inside a parallel loop (see demflow.jit)
-    x = d.x
-    y = d.y
-    vx = d.vx
-    vy = d.vy
-    om = d.om
-    r = d.r
-    mass = d.mass
-    inertia = d.inertia
-    th, C, Cr, xref, yref, Fx, Fy, M = d.th, d.C, d.Cr, d.xref, d.yref, d.Fx, d.Fy, d.M
-    n = x.shape[0]
+    n = P.shape[0]
     dmax2 = 0.0
     jump2 = 0.0
     for i in prange(n):
-        ri = r[i]
         sx = 0.0
         sy = 0.0
         sm = 0.0
@@ -190,47 +225,47 @@ def sum_and_integrate(d, P, start, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
             sx += f[e, 0]
             sy += f[e, 1]
             sm += f[e, 2]
-        Fx[i] = sx
-        Fy[i] = sy
-        M[i] = sm
+        Q[i, Q_FX] = sx
+        Q[i, Q_FY] = sy
+        Q[i, Q_M] = sm
         if has_ext:
             q = ext_perm[i]
             sx += ext[q, 0]
             sy += ext[q, 1]
             sm += ext[q, 2]
-        Ci = C[i]
-        Cri = Cr[i]
+        Ci = Q[i, Q_C]
+        Cri = Q[i, Q_CR]
+        mass = Q[i, Q_MASS]
+        inertia = Q[i, Q_INERTIA]
+        vx = P[i, 2]
+        vy = P[i, 3]
+        om = P[i, 4]
         if Ci == 0.0 and Cri == 0.0:
             # undamped: the same numbers as below with a = b = 0 (x(1 - 0) and y/(1 + 0) are exact), without
             # its divisions; nothing dissipated
-            vxi = vx[i] + (sx / mass[i] + gx) * dt
-            vyi = vy[i] + (sy / mass[i] + gy) * dt
-            omi = om[i] + sm * dt / inertia[i]
+            vxi = vx + (sx / mass + gx) * dt
+            vyi = vy + (sy / mass + gy) * dt
+            omi = om + sm * dt / inertia
         else:
-            a = Ci * dt / (2.0 * mass[i])
-            vxi = (vx[i] * (1.0 - a) + (sx / mass[i] + gx) * dt) / (1.0 + a)
-            vyi = (vy[i] * (1.0 - a) + (sy / mass[i] + gy) * dt) / (1.0 + a)
-            b = Cri * dt / (2.0 * inertia[i])
-            omi = (om[i] * (1.0 - b) + sm * dt / inertia[i]) / (1.0 + b)
-            mvx = 0.5 * (vx[i] + vxi)
-            mvy = 0.5 * (vy[i] + vyi)
-            mom = 0.5 * (om[i] + omi)
+            a = Ci * dt / (2.0 * mass)
+            vxi = (vx * (1.0 - a) + (sx / mass + gx) * dt) / (1.0 + a)
+            vyi = (vy * (1.0 - a) + (sy / mass + gy) * dt) / (1.0 + a)
+            b = Cri * dt / (2.0 * inertia)
+            omi = (om * (1.0 - b) + sm * dt / inertia) / (1.0 + b)
+            mvx = 0.5 * (vx + vxi)
+            mvy = 0.5 * (vy + vyi)
+            mom = 0.5 * (om + omi)
             diss[i] += (Ci * (mvx * mvx + mvy * mvy) + Cri * mom * mom) * dt
-        vx[i] = vxi
-        vy[i] = vyi
-        om[i] = omi
-        xi = x[i] + vxi * dt
-        yi = y[i] + vyi * dt
-        x[i] = xi
-        y[i] = yi
-        th[i] += omi * dt
+        xi = P[i, 0] + vxi * dt
+        yi = P[i, 1] + vyi * dt
+        Q[i, Q_TH] += omi * dt
         P[i, 0] = xi
         P[i, 1] = yi
         P[i, 2] = vxi
         P[i, 3] = vyi
         P[i, 4] = omi
-        ddx = xi - xref[i]
-        ddy = yi - yref[i]
+        ddx = xi - Q[i, Q_XREF]
+        ddy = yi - Q[i, Q_YREF]
         dmax2 = max(dmax2, ddx * ddx + ddy * ddy)
-        jump2 = max(jump2, (vxi * vxi + vyi * vyi) * dt * dt / (ri * ri))
+        jump2 = max(jump2, (vxi * vxi + vyi * vyi) * dt * dt * Q[i, Q_INV_R2])
     return dmax2, jump2

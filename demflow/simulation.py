@@ -20,6 +20,7 @@ from .contacts.forces import pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
+from .integrate import Q_WIDTH
 from .scene import MAX_WHOLE, EnergyBalanceWarning, SceneError, check_whole
 from .space import wrap
 from .state import (Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
@@ -239,7 +240,7 @@ class Simulation:
         self.rebuilds = 0
         self._slots = new_discs(n)
         self.layout = Layout(perm=np.arange(n, dtype=np.int64), inv=np.arange(n, dtype=np.int64),
-                             P=np.zeros((n, 8)))
+                             P=np.zeros((n, 8)), Q=np.zeros((n, Q_WIDTH)))
         self.records = []
         self.snapshots = []
         # energy accounts of the running chunk (stepping.run_steps) and the last chunk's balance

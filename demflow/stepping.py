@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .contacts.forces import pack_discs, pair_forces, wall_sums
-from .integrate import sum_and_integrate
+from .integrate import Q_INERTIA, Q_MASS, pack_state, sum_and_integrate, unpack_state
 from .jit import njit
 from .laws.base import law_energy_add
 from .walls import move_walls, set_wall_velocities
@@ -79,13 +79,14 @@ def state_is_finite(d, walls, hist):
 
 
 @njit
-def kinetic_energy_perm(d, inv):
-    """½Σ(m v² + I ω²) [force·length] of discs ``d`` stored in slots (disc i in slot inv[i]), summed
-    in disc order (the same sum to the bit)."""
+def kinetic_energy_perm(P, Q, inv):
+    """½Σ(m v² + I ω²) [force·length] of the discs in the packed rows P, Q of the cycle
+    (:func:`demflow.integrate.sum_and_integrate`; disc i in slot inv[i]), summed in disc order (the same sum
+    to the bit)."""
     e = 0.0
     for i in range(inv.shape[0]):
         p = inv[i]
-        e += 0.5 * (d.mass[p] * (d.vx[p] ** 2 + d.vy[p] ** 2) + d.inertia[p] * d.om[p] ** 2)
+        e += 0.5 * (Q[p, Q_MASS] * (P[p, 2] ** 2 + P[p, 3] ** 2) + Q[p, Q_INERTIA] * P[p, 4] ** 2)
     return e
 
 
@@ -237,7 +238,7 @@ def _record(q, step, pairs, walls, slots, lay, mat, law, rec, n_keys):
         else:
             rec.track[q, t, 0] = 0.0
             rec.track[q, t, 1] = 0.0
-    rec.energy[q, 0] = kinetic_energy_perm(slots, lay.inv)
+    rec.energy[q, 0] = kinetic_energy_perm(lay.P, lay.Q, lay.inv)
     rec.energy[q, 1] = elastic_energy_perm(pairs, mat, walls.mat, nd, law)
 
 
@@ -245,12 +246,26 @@ def _record(q, step, pairs, walls, slots, lay, mat, law, rec, n_keys):
 def _cycle(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
            rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs):
     """The steps of :func:`run_steps` on the slot-ordered state (``mat``: materials in disc order,
-    for the records' key-ordered sums)."""
+    for the records' key-ordered sums).  The steps advance the packed rows lay.P and lay.Q
+    (:func:`demflow.integrate.sum_and_integrate`), filled from ``slots`` here and written back to it on
+    return."""
+    pack_discs(slots, lay.P)
+    pack_state(slots, lay.Q)
+    out = _steps(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
+                 rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs)
+    unpack_state(lay.P, lay.Q, slots.x, slots.y, slots.vx, slots.vy, slots.om, slots.th, slots.Fx, slots.Fy,
+                 slots.M)
+    return out
+
+
+@njit
+def _steps(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
+           rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs):
+    """The loop of :func:`_cycle` over the steps."""
     nd = slots.x.shape[0]
     nw = walls.px.shape[0]
     n_keys = nd + nw
     P = lay.P
-    pack_discs(slots, P)
     for s in range(n):
         step = step0 + s
         recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
@@ -265,7 +280,7 @@ def _cycle(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, l
             _record(rec_count, step, pairs, walls, slots, lay, mat, law, rec, n_keys)
             rec_count += 1
         set_wall_velocities(step, walls, loading)
-        dmax2, jump2 = sum_and_integrate(slots, P, pairs.start_p, pairs.f, gx, gy, dt, ext,
+        dmax2, jump2 = sum_and_integrate(lay.Q, P, pairs.start_p, pairs.f, gx, gy, dt, ext,
                                          lay.perm, has_ext, diss_discs)
         if jump2 > MAX_STEP_RATIO * MAX_STEP_RATIO or not np.isfinite(jump2):
             return s + 1, BLOWUP, disp_walls, rec_count

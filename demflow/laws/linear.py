@@ -73,10 +73,24 @@ LinearParams = namedtuple("LinearParams", [
     "mu", "coh",  # (nm, nm) Coulomb coefficient tan φ_μ and cohesion c [force]
     "normal_mode", "sliding_mode",  # NORMAL_* and SLIDING_* (scene-wide, ContactModel)
     "has_shear",  # bool: some law has a shear spring (history has a shear column)
+    "row",  # (nm, nm, 8) the six tables above packed per material pair, (kn, ks, cn, cs, mu, coh, 0, 0)
 ])
-"""Parameters of the linear law as the compiled cycle sees them (see :mod:`demflow.laws.base`)."""
+"""Parameters of the linear law as the compiled cycle sees them (see :mod:`demflow.laws.base`).
+
+The per-contact force (:func:`law_force`, :func:`law_force_dissipation`, :func:`law_force3`) reads a
+pair's six numbers from ``row[ma, mb]``, one 64-byte row, instead of six tables (which are views of
+``row``): the same numbers, read from one cache line (benchmarks/results/speed2d_inprocess_ab.md)."""
 
 TABLE_KEYS = ("kn", "ks", "cn", "cs", "mu", "coh")
+
+
+def packed_rows(tables: dict) -> np.ndarray:
+    """The (nm, nm, 8) array of rows (kn, ks, cn, cs, mu, coh, 0, 0) of the (nm, nm) ``tables``."""
+    first = tables[TABLE_KEYS[0]]
+    row = np.zeros(first.shape + (8,))
+    for c, key in enumerate(TABLE_KEYS):
+        row[:, :, c] = tables[key]
+    return row
 
 
 @overload(law_force, inline="always")
@@ -87,9 +101,10 @@ def _linear_force(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
     def impl(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
         has_shear = law.has_shear
         s_old = hist[k, 1] if has_shear else 0.0
+        row = law.row
         N, S, Fn, Fs, sliding = linear_contact(
             overlap, ndot, sdot, hist[k, 0], s_old, dt,
-            law.kn[ma, mb], law.ks[ma, mb], law.cn[ma, mb], law.cs[ma, mb], law.mu[ma, mb], law.coh[ma, mb],
+            row[ma, mb, 0], row[ma, mb, 1], row[ma, mb, 2], row[ma, mb, 3], row[ma, mb, 4], row[ma, mb, 5],
             law.normal_mode, law.sliding_mode, has_shear)
         hist[k, 0] = N
         if has_shear:
@@ -112,10 +127,11 @@ def _linear_force_dissipation(law, hist, k, ma, mb, overlap, ndot, sdot, dt):
         has_shear = law.has_shear
         s_old = hist[k, 1] if has_shear else 0.0
         hist_n_old = hist[k, 0]
-        ks = law.ks[ma, mb]
+        row = law.row
+        ks = row[ma, mb, 1]
         N, S, Fn, Fs, sliding = linear_contact(
             overlap, ndot, sdot, hist_n_old, s_old, dt,
-            law.kn[ma, mb], ks, law.cn[ma, mb], law.cs[ma, mb], law.mu[ma, mb], law.coh[ma, mb],
+            row[ma, mb, 0], ks, row[ma, mb, 2], row[ma, mb, 3], row[ma, mb, 4], row[ma, mb, 5],
             law.normal_mode, law.sliding_mode, has_shear)
         hist[k, 0] = N
         if has_shear:
@@ -164,8 +180,9 @@ def _linear_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz
         return None
 
     def impl(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
-        return linear_contact3(law.kn[ma, mb], law.ks[ma, mb], law.cn[ma, mb], law.cs[ma, mb], law.mu[ma, mb],
-                               law.coh[ma, mb], law.normal_mode, law.sliding_mode, law.has_shear, hist, k, overlap,
+        row = law.row
+        return linear_contact3(row[ma, mb, 0], row[ma, mb, 1], row[ma, mb, 2], row[ma, mb, 3], row[ma, mb, 4],
+                               row[ma, mb, 5], law.normal_mode, law.sliding_mode, law.has_shear, hist, k, overlap,
                                vn, vtx, vty, vtz, dt)
     return impl
 
@@ -268,10 +285,13 @@ class Linear(LawFamily):
 
     def params(self) -> LinearParams:
         cm = self.scene.contact_model
-        t = self.tables()
+        row = packed_rows(self.tables())
+        # the six tables are views of the packed rows: a change made to one (a test setting every dashpot
+        # to NaN) is what the kernels read
+        t = {key: row[:, :, c] for c, key in enumerate(TABLE_KEYS)}
         return LinearParams(**t, normal_mode=NORMAL_INCREMENTAL if cm.normal == "incremental" else NORMAL_OVERLAP,
                             sliding_mode=SLIDING_CS if cm.sliding == "cs" else SLIDING_THESIS,
-                            has_shear=self.has_shear)
+                            has_shear=self.has_shear, row=row)
 
     def stiffness_bound(self, law) -> float:
         return max(law.kn, law.ks)

@@ -1,0 +1,158 @@
+"""In-process A/B of the 2D calculation cycle: this working tree's demflow against a base commit's, one process.
+
+    python benchmarks/bench_ab_inprocess.py --base 0ee02e7 [--sizes 10000 100000] [--chunk 500] [--rounds 40]
+
+Why one process: on a shared (virtual) host the speed of the machine drifts by up to 2x within minutes, so two
+processes timed one after the other compare the host's states more than the code (benchmarks/results/
+engines_speed.md: spreads of 8-38 % between rounds).  Here the base commit's ``demflow`` package is copied
+into a temporary directory under the name ``demflow_base`` and imported beside this tree's ``demflow``; both
+build the same scene (bench_engines.py's relaxed, agitated, undamped packing under the overlap law, one
+thread) and run it in alternating chunks of ``--chunk`` steps, the order swapped every round, so both see
+the same host states.  Reported per size: per-particle-step time of each (min, 10th percentile, median over
+the rounds), the per-round ratio head/base (min, median, max) and the ratio of the minima, and whether the
+two runs ended with the same bits (they must: the refactors this measures keep every result to the bit).
+Results: benchmarks/results/<tag>.{json,md}.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import io
+import json
+import os
+import pickle
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE / "benchmarks"))
+
+
+def _base_package(commit: str, where: Path) -> str:
+    """Copy the base commit's demflow/ to where/demflow_base; returns the resolved commit."""
+    sha = subprocess.run(["git", "rev-parse", commit], capture_output=True, text=True, cwd=HERE, check=True).stdout.strip()
+    arch = subprocess.run(["git", "archive", sha, "demflow"], capture_output=True, cwd=HERE, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(where)], input=arch, check=True)
+    shutil.move(str(where / "demflow"), str(where / "demflow_base"))
+    return sha
+
+
+def _load_as(raw: bytes, package: str):
+    """Unpickle a scene written with ``demflow`` classes as the classes of ``package``."""
+    class Renamed(pickle.Unpickler):
+        def find_class(self, module, name):
+            if module == "demflow" or module.startswith("demflow."):
+                module = package + module[len("demflow"):]
+            return super().find_class(module, name)
+    return Renamed(io.BytesIO(raw)).load()
+
+
+def measure(n: int, chunk: int, rounds: int, warm: int) -> dict:
+    import numba
+
+    import demflow
+    from bench_engines import engine_scene
+
+    numba.set_num_threads(1)
+    base = importlib.import_module("demflow_base")
+    scene, _ = engine_scene(n, threads=1)
+    raw = pickle.dumps(scene)
+    sims = {"base": base.build(_load_as(raw, "demflow_base")), "head": demflow.build(_load_as(raw, "demflow"))}
+    for s in sims.values():
+        s.run(warm, threads=1)
+    ts = {k: [] for k in sims}
+    for r in range(rounds):
+        order = list(sims) if r % 2 == 0 else list(reversed(list(sims)))
+        for k in order:
+            t0 = time.perf_counter()
+            sims[k].run(chunk, threads=1)
+            ts[k].append(time.perf_counter() - t0)
+    a, b = sims["base"], sims["head"]
+    same = all(np.array_equal(getattr(a, f), getattr(b, f)) for f in ("x", "y", "vx", "vy", "om"))
+    row = dict(n=n, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds_base=int(a.rebuilds),
+               rebuilds_head=int(b.rebuilds), same_bits=bool(same))
+    for k, v in ts.items():
+        ns = np.array(v) / chunk / n * 1e9
+        row[k] = dict(min=float(ns.min()), p10=float(np.percentile(ns, 10)), median=float(np.median(ns)),
+                      rounds=[float(x) for x in ns])
+    ratio = np.array(ts["head"]) / np.array(ts["base"])
+    row["ratio_rounds"] = dict(min=float(ratio.min()), median=float(np.median(ratio)), max=float(ratio.max()))
+    row["ratio_of_minima"] = row["head"]["min"] / row["base"]["min"]
+    return row
+
+
+def markdown(data: dict) -> str:
+    i = data["info"]
+    out = [f"# 2D cycle, this tree vs {i['base'][:7]} in one process ({i['date']})", "",
+           f"Head {i['head'][:7]}{' + working tree changes' if i['dirty'] else ''}; command `{i['command']}`; "
+           f"{i['cores']} cores, {i['cpu']}, numba {i['numba']}, one thread.  {i['notes']}", "",
+           "Scene: bench_engines.py's relaxed, agitated, undamped packing (overlap law), the same in both; chunks "
+           "of the given steps alternate between base and head, the order swapped each round.  ns per "
+           "particle-step (wall clock), over the rounds.", "",
+           "| N | chunk × rounds | base min | base p10 | base median | head min | head p10 | head median | "
+           "head/base per round (min / median / max) | ratio of minima | same bits | rebuilds |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in data["rows"]:
+        b, h, q = r["base"], r["head"], r["ratio_rounds"]
+        out.append(f"| {r['n']:,} | {r['chunk']} × {r['rounds']} | {b['min']:.1f} | {b['p10']:.1f} | {b['median']:.1f} | "
+                   f"{h['min']:.1f} | {h['p10']:.1f} | {h['median']:.1f} | {q['min']:.3f} / {q['median']:.3f} / "
+                   f"{q['max']:.3f} | {r['ratio_of_minima']:.3f} | {'yes' if r['same_bits'] else 'NO'} | "
+                   f"{r['rebuilds_head']} |")
+    return "\n".join(out) + "\n"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--base", required=True, help="the commit to compare against")
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 100000])
+    ap.add_argument("--chunk", type=int, nargs="+", default=None,
+                    help="steps per timed chunk, one per size (default 1e7/N: 1000 at 1e4, 100 at 1e5)")
+    ap.add_argument("--rounds", type=int, default=40)
+    ap.add_argument("--warm", type=int, default=200, help="untimed steps first (compilation, first rebuilds)")
+    ap.add_argument("--notes", default="")
+    ap.add_argument("--tag", default="speed2d_inprocess_ab")
+    ap.add_argument("--out", default=str(HERE / "benchmarks" / "results"))
+    a = ap.parse_args(argv)
+    chunks = a.chunk or [max(20, int(round(1e7 / n))) for n in a.sizes]
+    if len(chunks) != len(a.sizes):
+        ap.error(f"--chunk takes one value per size ({len(a.sizes)}), got {len(chunks)}")
+    with tempfile.TemporaryDirectory() as tmp:
+        sha = _base_package(a.base, Path(tmp))
+        sys.path.insert(0, tmp)
+        rows = []
+        for n, c in zip(a.sizes, chunks):
+            print(f"N = {n}: {a.rounds} rounds of {c} steps each ...", flush=True)
+            rows.append(measure(n, c, a.rounds, a.warm))
+            r = rows[-1]
+            print(f"  base min {r['base']['min']:.1f} head min {r['head']['min']:.1f} ns/p-step, "
+                  f"ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "
+                  f"same bits {r['same_bits']}", flush=True)
+    import numba
+
+    head = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
+    dirty = bool(subprocess.run(["git", "status", "--porcelain", "demflow"], capture_output=True, text=True,
+                                cwd=HERE).stdout.strip())
+    info = dict(date=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), base=sha, head=head, dirty=dirty,
+                command="python benchmarks/bench_ab_inprocess.py " + " ".join(sys.argv[1:] if argv is None else argv),
+                notes=a.notes, cores=os.cpu_count(), cpu=platform.processor() or platform.machine(),
+                numba=numba.__version__)
+    data = dict(info=info, rows=rows)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for path, text in ((out / f"{a.tag}.json", json.dumps(data, indent=2)), (out / f"{a.tag}.md", markdown(data))):
+        tmp = path.with_suffix(path.suffix + ".tmp")
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    print(markdown(data))
+
+
+if __name__ == "__main__":
+    main()
