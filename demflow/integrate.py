@@ -195,16 +195,18 @@ def unpack_state(P, Q, x, y, vx, vy, om, th, Fx, Fy, M):
 
 
 @njit_parallel
-def sum_and_integrate(Q, P, start, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
+def sum_and_integrate(Q, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
     The discs (slot order) are the packed rows P (x, y, vx, vy, ω, R, material, 0;
     :func:`demflow.contacts.forces.pack_discs`) and Q (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M;
     :func:`pack_state`): per disc two rows, so the pass reads and writes a few cache lines instead of sixteen
-    arrays (benchmarks/results/speed2d_inprocess_ab.md).  Each disc sums its contacts
-    in CSR order, entries start[i]..start[i+1]: f[e] = (fx, fy, Fs·R), the contact's force on this disc and
-    its moment, written there by :func:`demflow.contacts.forces.pair_forces` (the other disc's share
-    is the negated force, so the sums equal those of f_finder subtracted, to the bit).  The update is thesis
+    arrays (benchmarks/results/speed2d_inprocess_ab.md).  Each disc sums its contacts in CSR order, entries
+    e = start[i]..start[i+1] naming pair k by sidx[e] = 2k (this disc its finder) or 2k + 1 (its other disc):
+    f[k] = (fx, fy, Fs) is pair k's force on its finder and shear force
+    (:func:`demflow.contacts.forces.pair_forces`), and the disc's share is (fx, fy, Fs·R) as the finder and
+    (-fx, -fy, Fs·R) as the other disc, R its own radius (the numbers the per-entry rows of 0ee02e7 held, so
+    the same sums to the bit; a pair's force is written once and read twice instead of written twice).  The update is thesis
     eqs 2.27-2.30 (see the module docstring); the new x, y, v, ω go to P, θ and the contact sums to Q.
     With ``has_ext`` the external force and moment ``ext[ext_perm[i]]`` = (fx, fy, m) (the fluid force,
     moment and buoyancy of a saturated scene, thesis §3.4 and eq 4.39, in disc order, ``ext_perm`` mapping
@@ -218,13 +220,18 @@ def sum_and_integrate(Q, P, start, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
     dmax2 = 0.0
     jump2 = 0.0
     for i in prange(n):
+        ri = P[i, 5]
         sx = 0.0
         sy = 0.0
         sm = 0.0
         for e in range(start[i], start[i + 1]):
-            sx += f[e, 0]
-            sy += f[e, 1]
-            sm += f[e, 2]
+            q = sidx[e]
+            k = q >> 1
+            # as the other disc (q odd) the negated force: -x is x·(-1) exactly
+            s = 1.0 - 2.0 * (q & 1)
+            sx += s * f[k, 0]
+            sy += s * f[k, 1]
+            sm += f[k, 2] * ri
         Q[i, Q_FX] = sx
         Q[i, Q_FY] = sy
         Q[i, Q_M] = sm

@@ -35,12 +35,6 @@ ENERGY_ROUND_OFF = 1e-9
 
 
 
-def _pair_entries(m: int):
-    """(e_fin, e_oth) for :func:`~demflow.contacts.forces.pair_forces` outside the cycle: pair k's
-    finder share at row 2k, its other disc's at 2k + 1 of a (2m, 3) array."""
-    e = np.arange(0, 2 * m, 2, dtype=np.int64)
-    return e, e + 1
-
 class BlowUpError(RuntimeError):
     """The run became unstable; ``path`` holds the last good state."""
 
@@ -318,7 +312,7 @@ class Simulation:
         wall_pairs = np.flatnonzero(other >= self.n).astype(np.int64)
         # the steps run on the discs renumbered in spatial order (see stepping.run_steps)
         perm = spatial_order(d.x, d.y, d.r, self.skin)
-        inv, pos, fin_p, oth_p, start_p, sidx_p, e_fin, e_oth, wall_p = internal_layout(finder, other, self.n, perm, start, sidx,
+        inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p = internal_layout(finder, other, self.n, perm, start, sidx,
                                                                           wall_pairs)
         sx_p, sy_p = np.empty_like(sx), np.empty_like(sy)
         sx_p[pos[:sx.shape[0]]] = sx
@@ -328,7 +322,7 @@ class Simulation:
         self._wwork_pairs = np.zeros(finder.shape[0])
         self.pairs = Pairs(finder=finder, other=other, hist=hist, sx=sx, sy=sy, pos=pos, fin_p=fin_p, oth_p=oth_p,
                            hist_p=np.empty_like(hist), sx_p=sx_p, sy_p=sy_p, start_p=start_p, sidx_p=sidx_p,
-                           e_fin=e_fin, e_oth=e_oth, wall_p=wall_p, f=np.zeros((sidx_p.shape[0], 3)), out=pair_outputs(m))
+                           wall_p=wall_p, f=np.zeros((m, 3)), out=pair_outputs(m))
         self.layout = self.layout._replace(perm=perm, inv=inv)
         d.xref[:] = d.x
         d.yref[:] = d.y
@@ -479,16 +473,18 @@ class Simulation:
         P = np.zeros((n, 8))
         pack_discs(d, P)
         h = pr.hist.copy()
-        f = np.zeros((2 * m, 3))  # each pair's two shares: the finder's at 2k, the other disc's at 2k + 1
+        f = np.zeros((m, 3))  # each pair's force on its finder and its shear force (fx, fy, Fs)
         diss, wwork = np.zeros(m), np.zeros(m)
         if m:
             pair_forces(pr.finder, pr.other, h, pr.sx, pr.sy, P, n, self.walls, self.law_params, self.box, self.dt,
-                        *_pair_entries(m), f, False, *pair_outputs(m), np.inf, diss, wwork)
+                        f, False, *pair_outputs(m), np.inf, diss, wwork)
         # each disc's force and moment sums at step n (as demflow.integrate.sum_and_integrate), then v_{n+1/2}
         fx, fy, mo = np.zeros(n), np.zeros(n), np.zeros(n)
         if m:
             disc = pr.other < n
-            ff, fo = f[0::2], f[1::2][disc]
+            # each disc's share: (fx, fy, Fs·R) as the finder, (-fx, -fy, Fs·R) as the other disc
+            ff = np.column_stack((f[:, 0], f[:, 1], f[:, 2] * d.r[pr.finder]))
+            fo = np.column_stack((-f[disc, 0], -f[disc, 1], f[disc, 2] * d.r[pr.other[disc]]))
             np.add.at(fx, pr.finder, ff[:, 0])
             np.add.at(fy, pr.finder, ff[:, 1])
             np.add.at(mo, pr.finder, ff[:, 2])
@@ -627,7 +623,7 @@ class Simulation:
         pack_discs(self.discs, P)
         out = pair_outputs(m)
         pair_forces(pr.finder, pr.other, pr.hist.copy(), pr.sx, pr.sy, P, self.n, self.walls, self.law_params,
-                    self.box, self.dt, *_pair_entries(m), np.zeros((2 * m, 3)), True, *out, np.inf, np.zeros(m),
+                    self.box, self.dt, np.zeros((m, 3)), True, *out, np.inf, np.zeros(m),
                     np.zeros(m))
         fn, fs, slide, ovl, cpx, cpy = out
         on = ovl > 0

@@ -51,11 +51,10 @@ Pairs = namedtuple("Pairs", [
     "fin_p", "oth_p",    # pairs in internal order and slot numbering (int64)
     "hist_p",            # history in internal order
     "sx_p", "sy_p",      # image shifts in internal order
-    "start_p", "sidx_p",  # CSR contacts of each slot (sidx = k finder, -(k+1) other)
-    "e_fin", "e_oth",    # pair k's two CSR entries (internal order; e_oth = -1 for a wall pair) (int64)
+    "start_p", "sidx_p",  # CSR contacts of each slot (sidx uint32: 2k as pair k's finder, 2k + 1 as its other)
     "wall_p",            # internal positions of the disc-wall pairs, increasing (int64)
-    "f",                 # (entries, 3) per step, in CSR order: each contact's force on the slot's disc
-                         # (fx, fy) and moment Fs·R (pair_forces writes both entries of a pair)
+    "f",                 # (m, 3) per step, internal order: each pair's force on its finder (fx, fy) and its
+                         # shear force Fs (pair_forces; each disc's share is formed where the sums are taken)
     "out",               # PairOutputs in internal order
 ])
 
@@ -112,8 +111,8 @@ def empty_pairs(n_hist: int) -> Pairs:
     f0 = np.empty(0)
     return Pairs(finder=i0, other=i0.copy(), hist=np.zeros((0, n_hist)), sx=f0, sy=f0.copy(),
                  pos=i0.copy(), fin_p=i0.copy(), oth_p=i0.copy(), hist_p=np.zeros((0, n_hist)),
-                 sx_p=f0.copy(), sy_p=f0.copy(), start_p=np.zeros(1, np.int64), sidx_p=i0.copy(),
-                 e_fin=i0.copy(), e_oth=i0.copy(), wall_p=i0.copy(), f=np.zeros((0, 3)), out=pair_outputs(0))
+                 sx_p=f0.copy(), sy_p=f0.copy(), start_p=np.zeros(1, np.int64), sidx_p=np.empty(0, np.uint32),
+                 wall_p=i0.copy(), f=np.zeros((0, 3)), out=pair_outputs(0))
 
 
 def pair_outputs(m: int) -> PairOutputs:

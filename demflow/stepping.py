@@ -271,16 +271,16 @@ def _steps(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, l
         recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
         o = pairs.out
         nbad = pair_forces(pairs.fin_p, pairs.oth_p, pairs.hist_p, pairs.sx_p, pairs.sy_p, P, nd, walls, law, box,
-                           dt, pairs.e_fin, pairs.e_oth, pairs.f, recording, o.fn, o.fs, o.slide, o.ovl, o.cpx, o.cpy, MAX_OVERLAP_RATIO,
+                           dt, pairs.f, recording, o.fn, o.fs, o.slide, o.ovl, o.cpx, o.cpy, MAX_OVERLAP_RATIO,
                            diss_pairs, wwork_pairs)
         if nbad > 0:
             return s, BLOWUP, disp_walls, rec_count
-        wall_sums(pairs.wall_p, pairs.oth_p, nd, pairs.e_fin, pairs.f, pairs.out, walls)
+        wall_sums(pairs.wall_p, pairs.oth_p, nd, pairs.f, pairs.out, walls)
         if recording:
             _record(rec_count, step, pairs, walls, slots, lay, mat, law, rec, n_keys)
             rec_count += 1
         set_wall_velocities(step, walls, loading)
-        dmax2, jump2 = sum_and_integrate(lay.Q, P, pairs.start_p, pairs.f, gx, gy, dt, ext,
+        dmax2, jump2 = sum_and_integrate(lay.Q, P, pairs.start_p, pairs.sidx_p, pairs.f, gx, gy, dt, ext,
                                          lay.perm, has_ext, diss_discs)
         if jump2 > MAX_STEP_RATIO * MAX_STEP_RATIO or not np.isfinite(jump2):
             return s + 1, BLOWUP, disp_walls, rec_count

@@ -1,13 +1,12 @@
 """Contact forces on every listed pair, and their sums per wall.
 
 :func:`pair_forces` evaluates every pair of the neighbour list in parallel (one pair, one
-iteration: no write conflicts).  Per pair it stores only what the next stages read — each disc's
-share of the contact, (fx, fy, Fs·R) on the finder and (-fx, -fy, Fs·R) on the other disc, written
-into the pair's two entries of the per-disc CSR list (so the sums read contiguous rows), plus
-overlap and contact point of wall pairs (for :func:`wall_sums`) — and the full per-pair outputs
+iteration: no write conflicts).  Per pair it stores only what the next stages read — the force on the
+finder and the shear force, (fx, fy, Fs), in the pair's own row (written in pair order, one row per pair),
+plus overlap and contact point of wall pairs (for :func:`wall_sums`) — and the full per-pair outputs
 (normal and shear force, sliding flag, overlap, contact point) on steps that record.  Each disc then
-sums its own entries in CSR order (:func:`demflow.integrate.sum_and_integrate`, fixed order: results
-do not depend on the thread count).  A pair whose centres are certainly farther apart than the sum
+sums its shares, (fx, fy, Fs·R) as the finder and (-fx, -fy, Fs·R) as the other disc, in CSR order
+(:func:`demflow.integrate.sum_and_integrate`, fixed order: results do not depend on the thread count).  A pair whose centres are certainly farther apart than the sum
 of the radii (d² > (R_i + R_j)²·APART_MARGIN) skips the square root on steps that do not record.
 
 The kernel is one loop for every law and every box: the law's compiled functions
@@ -34,16 +33,15 @@ APART_MARGIN = 1.0 + 1e-12
 
 
 @njit_parallel
-def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, e_fin, e_oth, f, full,
+def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
                 o_fn, o_fs, o_slide, o_ovl, o_cpx, o_cpy, max_overlap_ratio, diss, wwork):
     """Evaluate every listed pair (thesis eqs 2.7-2.20) and update its history in place.
 
     fin, oth: the pairs (other >= n: wall other - n); hist: their history rows; sx, sy: image
     shifts (periodic boxes); P (n, 8): each disc's (x, y, vx, vy, ω, R, material, -) in one 64-byte
     row, so a pair gathers one cache line per disc (see :func:`pack_discs`).  Writes pair k's
-    shares into the rows e_fin[k] and e_oth[k] of f (the per-disc CSR entries,
-    :func:`demflow.contacts.neighbours.internal_layout`): (fx, fy, Fs·R_i), the force on the finder
-    and its moment, and (-fx, -fy, Fs·R_j) for the other disc (none for a wall); the fields
+    force on its finder and its shear force, f[k] = (fx, fy, Fs) (the finder's share is (fx, fy, Fs·R_i),
+    the other disc's (-fx, -fy, Fs·R_j): :func:`demflow.integrate.sum_and_integrate` forms them); the fields
     of :class:`~demflow.state.PairOutputs`, passed one by one (o_fn, ..., o_cpy; see
     :mod:`demflow.jit` for why): ovl, cpx, cpy for wall pairs always and for every pair when
     ``full``, fn, fs, slide only when ``full``.  Pairs not touching get zero force and lose
@@ -71,16 +69,11 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, e_fin, e_oth,
             rs = ri + rj
             if not full and d2 > rs * rs * APART_MARGIN:
                 # certainly apart (the margin covers the rounding of rs·rs against that of √d2, so the
-                # test below would say the same): no square root, nothing to write but the zero shares
+                # test below would say the same): no square root, nothing to write but the zero force
                 law_separate(law, hist, k)
-                ef = e_fin[k]
-                eo = e_oth[k]
-                f[ef, 0] = 0.0
-                f[ef, 1] = 0.0
-                f[ef, 2] = 0.0
-                f[eo, 0] = 0.0
-                f[eo, 1] = 0.0
-                f[eo, 2] = 0.0
+                f[k, 0] = 0.0
+                f[k, 1] = 0.0
+                f[k, 2] = 0.0
                 continue
             D = np.sqrt(d2)
             overlap = rs - D
@@ -128,17 +121,11 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, e_fin, e_oth,
             o_ovl[k] = overlap
             o_cpx[k] = px
             o_cpy[k] = py
-        ef = e_fin[k]
         if overlap <= 0.0:
             law_separate(law, hist, k)
-            f[ef, 0] = 0.0
-            f[ef, 1] = 0.0
-            f[ef, 2] = 0.0
-            if j < n:
-                eo = e_oth[k]
-                f[eo, 0] = 0.0
-                f[eo, 1] = 0.0
-                f[eo, 2] = 0.0
+            f[k, 0] = 0.0
+            f[k, 1] = 0.0
+            f[k, 2] = 0.0
             if full:
                 o_fn[k] = 0.0
                 o_fs[k] = 0.0
@@ -151,14 +138,9 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, e_fin, e_oth,
             wwork[k] -= (Fn_work * (wvqx * ex + wvqy * ey) + Fs_work * (wvqx * tx + wvqy * ty)) * dt
         fx = -Fn * ex - Fs * tx
         fy = -Fn * ey - Fs * ty
-        f[ef, 0] = fx
-        f[ef, 1] = fy
-        f[ef, 2] = Fs * ri
-        if j < n:
-            eo = e_oth[k]
-            f[eo, 0] = -fx
-            f[eo, 1] = -fy
-            f[eo, 2] = Fs * rj
+        f[k, 0] = fx
+        f[k, 1] = fy
+        f[k, 2] = Fs
         if full:
             o_fn[k] = Fn
             o_fs[k] = Fs
@@ -169,7 +151,7 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, e_fin, e_oth,
 
 
 @njit
-def wall_sums(wall_pairs, oth, n, e_fin, f, out, walls):
+def wall_sums(wall_pairs, oth, n, f, out, walls):
     """Force of the discs on each wall and its moment about the wall point P,
     walls.force[w] = (Fx, Fy, M_P), summed over the wall pairs only (``wall_pairs``: their
     indices k, in increasing order, so the sums are the same to the bit); f as in pair_forces."""
@@ -180,8 +162,8 @@ def wall_sums(wall_pairs, oth, n, e_fin, f, out, walls):
         if out.ovl[k] <= 0.0:
             continue
         w = oth[k] - n
-        Fwx = -f[e_fin[k], 0]
-        Fwy = -f[e_fin[k], 1]
+        Fwx = -f[k, 0]
+        Fwy = -f[k, 1]
         wf[w, 0] += Fwx
         wf[w, 1] += Fwy
         wf[w, 2] += (out.cpx[k] - walls.px[w]) * Fwy - (out.cpy[k] - walls.py[w]) * Fwx

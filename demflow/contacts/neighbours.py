@@ -323,12 +323,13 @@ def internal_layout(finder, other, n, perm, start, sidx, wall_pairs):
     """Contact lists renumbered for discs stored in the order ``perm`` (slot p holds disc
     perm[p]), pairs grouped by their finder's slot (keeping the key order within a finder).
 
-    Returns (inv, pos, fin_p, oth_p, start_p, sidx_p, e_fin, e_oth, wall_p): inv[disc] = slot,
+    Returns (inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p): inv[disc] = slot,
     pos[k] = internal position of listed pair k; fin_p/oth_p the pairs in internal order
     and numbering (walls keep n + w); (start_p, sidx_p) the per-slot contacts, each
     slot's entries in the order of the disc's own list (start, sidx) so force sums are
-    added in the same order; e_fin[k'], e_oth[k'] the two entries of internal pair k' (its
-    finder's and its other disc's; -1 for a wall), where the pair pass writes each disc's share;
+    added in the same order, naming internal pairs: 2k' where the slot's disc is internal pair k''s
+    finder, 2k' + 1 where it is its other disc (unsigned 32-bit: half the bytes of a signed 64-bit index, and
+    indexing with it needs no negative-index test);
     wall_p = pos[wall_pairs] (same order).
     """
     m = finder.shape[0]
@@ -355,22 +356,16 @@ def internal_layout(finder, other, n, perm, start, sidx, wall_pairs):
     for p in range(n):
         i = perm[p]
         start_p[p + 1] = start_p[p] + start[i + 1] - start[i]
-    sidx_p = np.empty(start_p[n], np.int64)
+    if 2 * m + 1 > 0xFFFFFFFF:
+        raise ValueError("more than 2**31 - 1 listed pairs: the contact entries are 32-bit (2k or 2k + 1)")
+    sidx_p = np.empty(start_p[n], np.uint32)
     for p in range(n):
         i = perm[p]
         e0 = start_p[p]
         for e in range(start[i], start[i + 1]):
             k = sidx[e]
-            sidx_p[e0 + e - start[i]] = pos[k] if k >= 0 else -pos[-k - 1] - 1
+            sidx_p[e0 + e - start[i]] = 2 * pos[k] if k >= 0 else 2 * pos[-k - 1] + 1
     wall_p = np.empty(wall_pairs.shape[0], np.int64)
     for q in range(wall_pairs.shape[0]):
         wall_p[q] = pos[wall_pairs[q]]
-    e_fin = np.empty(m, np.int64)
-    e_oth = np.full(m, -1, np.int64)
-    for e in range(start_p[n]):
-        k = sidx_p[e]
-        if k >= 0:
-            e_fin[k] = e
-        else:
-            e_oth[-k - 1] = e
-    return inv, pos, fin_p, oth_p, start_p, sidx_p, e_fin, e_oth, wall_p
+    return inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p
