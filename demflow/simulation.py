@@ -34,7 +34,6 @@ from .tolerances import tol
 ENERGY_ROUND_OFF = 1e-9
 
 
-
 class BlowUpError(RuntimeError):
     """The run became unstable; ``path`` holds the last good state."""
 
@@ -482,15 +481,14 @@ class Simulation:
         fx, fy, mo = np.zeros(n), np.zeros(n), np.zeros(n)
         if m:
             disc = pr.other < n
+            j = pr.other[disc]
             # each disc's share: (fx, fy, Fs·R) as the finder, (-fx, -fy, Fs·R) as the other disc
-            ff = np.column_stack((f[:, 0], f[:, 1], f[:, 2] * d.r[pr.finder]))
-            fo = np.column_stack((-f[disc, 0], -f[disc, 1], f[disc, 2] * d.r[pr.other[disc]]))
-            np.add.at(fx, pr.finder, ff[:, 0])
-            np.add.at(fy, pr.finder, ff[:, 1])
-            np.add.at(mo, pr.finder, ff[:, 2])
-            np.add.at(fx, pr.other[disc], fo[:, 0])
-            np.add.at(fy, pr.other[disc], fo[:, 1])
-            np.add.at(mo, pr.other[disc], fo[:, 2])
+            np.add.at(fx, pr.finder, f[:, 0])
+            np.add.at(fy, pr.finder, f[:, 1])
+            np.add.at(mo, pr.finder, f[:, 2] * d.r[pr.finder])
+            np.add.at(fx, j, -f[disc, 0])
+            np.add.at(fy, j, -f[disc, 1])
+            np.add.at(mo, j, f[disc, 2] * d.r[j])
         if self.has_external_force:
             fx, fy, mo = fx + self.external_force[:, 0], fy + self.external_force[:, 1], mo + self.external_force[:, 2]
         dt = self.dt
