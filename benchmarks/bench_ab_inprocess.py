@@ -1,6 +1,7 @@
-"""In-process A/B of the 2D calculation cycle: this working tree's demflow against a base commit's, one process.
+"""In-process A/B of the calculation cycle: this working tree's demflow against a base commit's, one process.
 
     python benchmarks/bench_ab_inprocess.py --base 0ee02e7 [--sizes 10000 100000] [--chunk 500] [--rounds 40]
+    python benchmarks/bench_ab_inprocess.py --base 0ee02e7 --dim 3 [--sizes 10000 100000]   # the 3D sphere cycle
 
 Why one process: on a shared (virtual) host the speed of the machine drifts by up to 2x within minutes, so two
 processes timed one after the other compare the host's states more than the code (benchmarks/results/
@@ -8,7 +9,8 @@ engines_speed.md: spreads of 8-38 % between rounds).  Here the base commit's ``d
 into a temporary directory under the name ``demflow_base`` and imported beside this tree's ``demflow``; both
 build the same scene (bench_engines.py's relaxed, agitated, undamped packing under the overlap law, one
 thread) and run it in alternating chunks of ``--chunk`` steps, the order swapped every round, so both see
-the same host states.  Reported per size: per-particle-step time of each (min, 10th percentile, median over
+the same host states.  With ``--dim 3`` the scene is bench_engines3d.py's, packing3d.py's dense FCC Hertz sphere
+packing (``dense_fcc(n)``, one thread).  Reported per size: per-particle-step time of each (min, 10th percentile, median over
 the rounds), the per-round ratio head/base (min, median, max) and the ratio of the minima, and whether the
 two runs ended with the same bits (they must: the refactors this measures keep every result to the bit).
 Results: benchmarks/results/<tag>.{json,md}.
@@ -55,30 +57,46 @@ def _load_as(raw: bytes, package: str):
     return Renamed(io.BytesIO(raw)).load()
 
 
-def measure(n: int, chunk: int, rounds: int, warm: int) -> dict:
+def _state(sim, dim: int) -> tuple:
+    if dim == 3:
+        sp = sim.spheres
+        return sp.pos, sp.vel, sp.angvel, sim.pairs.hist
+    return tuple(getattr(sim, f) for f in ("x", "y", "vx", "vy", "om"))
+
+
+def measure(n: int, chunk: int, rounds: int, warm: int, dim: int = 2) -> dict:
     import numba
 
     import demflow
-    from bench_engines import engine_scene
 
     numba.set_num_threads(1)
     base = importlib.import_module("demflow_base")
-    scene, _ = engine_scene(n, threads=1)
+    if dim == 3:
+        from packing3d import dense_fcc
+
+        scene = dense_fcc(n)
+        kw = {}
+    else:
+        from bench_engines import engine_scene
+
+        scene, _ = engine_scene(n, threads=1)
+        kw = dict(threads=1)
     raw = pickle.dumps(scene)
     sims = {"base": base.build(_load_as(raw, "demflow_base")), "head": demflow.build(_load_as(raw, "demflow"))}
     for s in sims.values():
-        s.run(warm, threads=1)
+        s.run(warm, **kw)
     ts = {k: [] for k in sims}
     for r in range(rounds):
         order = list(sims) if r % 2 == 0 else list(reversed(list(sims)))
         for k in order:
             t0 = time.perf_counter()
-            sims[k].run(chunk, threads=1)
+            sims[k].run(chunk, **kw)
             ts[k].append(time.perf_counter() - t0)
     a, b = sims["base"], sims["head"]
-    same = all(np.array_equal(getattr(a, f), getattr(b, f)) for f in ("x", "y", "vx", "vy", "om"))
-    row = dict(n=n, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds_base=int(a.rebuilds),
-               rebuilds_head=int(b.rebuilds), same_bits=bool(same))
+    same = all(np.array_equal(u, v) for u, v in zip(_state(a, dim), _state(b, dim)))
+    reb = "n_rebuilds" if dim == 3 else "rebuilds"
+    row = dict(n=n, dim=dim, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds_base=int(getattr(a, reb)),
+               rebuilds_head=int(getattr(b, reb)), same_bits=bool(same))
     for k, v in ts.items():
         ns = np.array(v) / chunk / n * 1e9
         row[k] = dict(min=float(ns.min()), p10=float(np.percentile(ns, 10)), median=float(np.median(ns)),
@@ -91,10 +109,13 @@ def measure(n: int, chunk: int, rounds: int, warm: int) -> dict:
 
 def markdown(data: dict) -> str:
     i = data["info"]
-    out = [f"# 2D cycle, this tree vs {i['base'][:7]} in one process ({i['date']})", "",
+    dim = data["rows"][0].get("dim", 2) if data["rows"] else 2
+    scene = ("packing3d.py's dense FCC Hertz sphere packing (periodic x/y, floor, gravity)" if dim == 3 else
+             "bench_engines.py's relaxed, agitated, undamped packing (overlap law)")
+    out = [f"# {dim}D cycle, this tree vs {i['base'][:7]} in one process ({i['date']})", "",
            f"Head {i['head'][:7]}{' + working tree changes' if i['dirty'] else ''}; command `{i['command']}`; "
            f"{i['cores']} cores, {i['cpu']}, numba {i['numba']}, one thread.  {i['notes']}", "",
-           "Scene: bench_engines.py's relaxed, agitated, undamped packing (overlap law), the same in both; chunks "
+           f"Scene: {scene}, the same in both; chunks "
            "of the given steps alternate between base and head, the order swapped each round.  ns per "
            "particle-step (wall clock), over the rounds.", "",
            "| N | chunk × rounds | base min | base p10 | base median | head min | head p10 | head median | "
@@ -116,6 +137,7 @@ def main(argv=None):
     ap.add_argument("--chunk", type=int, nargs="+", default=None,
                     help="steps per timed chunk, one per size (default 1e7/N: 1000 at 1e4, 100 at 1e5)")
     ap.add_argument("--rounds", type=int, default=40)
+    ap.add_argument("--dim", type=int, choices=(2, 3), default=2, help="the 2D disc cycle or the 3D sphere cycle")
     ap.add_argument("--warm", type=int, default=200, help="untimed steps first (compilation, first rebuilds)")
     ap.add_argument("--notes", default="")
     ap.add_argument("--tag", default="speed2d_inprocess_ab")
@@ -130,7 +152,7 @@ def main(argv=None):
         rows = []
         for n, c in zip(a.sizes, chunks):
             print(f"N = {n}: {a.rounds} rounds of {c} steps each ...", flush=True)
-            rows.append(measure(n, c, a.rounds, a.warm))
+            rows.append(measure(n, c, a.rounds, a.warm, a.dim))
             r = rows[-1]
             print(f"  base min {r['base']['min']:.1f} head min {r['head']['min']:.1f} ns/p-step, "
                   f"ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "

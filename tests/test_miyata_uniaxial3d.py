@@ -262,3 +262,14 @@ def test_monotone_steps_and_stress_falls_on_a_hand_made_curve():
     assert d["n_deep_past"] == 1  # only the second starts from a maximum >= 25
     rising = c.assign(plate_stress=[0.0, 1.0, 2.0, 3.0, 4.0, 5.0])
     assert stress_falls(rising)["n_deep"] == 0 and (monotone_steps(rising) >= 0).all()
+
+
+def test_the_reduced_variant_runs_in_the_default_validate_and_the_others_do_not():
+    """Issue 14 item 2: the reduced variant is a default case of `demflow validate`; the full run, the ellipsoid
+    variants, the K-sweep and the trade-off study stay slow (minutes to an hour each)."""
+    from demflow.cases import CASES
+
+    assert not CASES["miyata-uniaxial-3d"].slow
+    for name in ("miyata-uniaxial-3d-full", "miyata-uniaxial-3d-ellipsoids", "miyata-uniaxial-3d-ellipsoids-full",
+                 "miyata-uniaxial-3d-ksweep", "tradeoff-miyata-uniaxial-3d"):
+        assert CASES[name].slow, name
