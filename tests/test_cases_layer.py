@@ -315,3 +315,40 @@ def test_validate_removes_a_figure_an_earlier_run_of_the_case_left(tmp_path):
     assert not stale.exists()
     assert all((out / "ch3-impulse-chain" / f).exists() for f in again)
     assert (out / "ch3-impulse-chain" / "index.html").exists()
+
+
+def test_a_page_kept_from_other_code_is_marked(tmp_path):
+    """A page kept from a run with other code (a slow case's, kept from its last run) is marked on the index, on its
+    page and in summary.json; a page run with this code is not; the fingerprint follows the sources' bytes."""
+    import json as _json
+
+    from demflow.report.validation import code_fingerprint, write_report
+
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "a.py").write_text("x = 1\n")
+    (pkg / "sub" / "b.py").write_text("y = 2\n")
+    before = code_fingerprint(str(pkg))
+    (pkg / "sub" / "b.py").write_text("y = 3\n")
+    assert code_fingerprint(str(pkg)) != before and len(before) == 12
+    assert code_fingerprint() == code_fingerprint()
+
+    def entry(code):
+        e = dict(physics={}, run_at="2026-01-01 00:00:00", slow=True, title="t", source="s", params={}, wall_time_s=0.0,
+                 passed=True, assumptions=[], figures=[], checks=[])
+        if code is not None:
+            e["code"] = code
+        return e
+
+    summary = dict(generated="now", python="3", machine="x", cases={
+        "thesis-impact": entry(code_fingerprint()), "cs-nine-disc": entry("0123456789ab"), "thesis-one-disc": entry(None)})
+    out = tmp_path / "report"
+    write_report(summary, out)
+    stored = _json.loads((out / "summary.json").read_text())
+    assert stored["code"] == code_fingerprint()
+    assert sorted(stored["pages_not_run_with_this_code"]) == ["cs-nine-disc", "thesis-one-disc"]
+    index = (out / "index.html").read_text()
+    assert "2 of 3 pages were not run with this code" in index
+    assert "run with other code (0123456789ab" in (out / "cs-nine-disc" / "index.html").read_text()
+    assert "code unknown" in (out / "thesis-one-disc" / "index.html").read_text()
+    assert "not this code" not in (out / "thesis-impact" / "index.html").read_text()

@@ -75,12 +75,15 @@ def micro_state(sim, volume: float) -> dict:
     lever_w = rel[wi] + nw * (sp.r[wi] - 0.5 * ov[wall])[:, None]
     M += lever_w.T @ Fw
     sigma = -M / float(volume)
-    pairs_bb = np.unique(np.sort(np.column_stack([body[si], body[sj]]), axis=1), axis=0) if si.size else np.zeros((0, 2))
-    pairs_bw = np.unique(np.column_stack([body[wi], w]), axis=0) if wi.size else np.zeros((0, 2))
+    # distinct body pairs and (body, plane) pairs, each as one integer key (np.unique of a 1D array: the same
+    # count as of the rows, several times faster than np.unique(axis=0) on the many records of a loading)
+    lo, hi = np.minimum(body[si], body[sj]), np.maximum(body[si], body[sj])
+    n_bb = np.unique(lo * nb + hi).size
+    n_bw = np.unique(body[wi] * npl + w).size
     fabric = nvec.T @ nvec / max(nvec.shape[0], 1)
-    z = 2.0 * len(pairs_bb) / nb
-    return {"coordination": z, "coordination_walls": (2.0 * len(pairs_bb) + len(pairs_bw)) / nb,
-            "member_contacts_per_body_pair": (float(si.size) / len(pairs_bb)) if len(pairs_bb) else float("nan"),
+    z = 2.0 * n_bb / nb
+    return {"coordination": z, "coordination_walls": (2.0 * n_bb + n_bw) / nb,
+            "member_contacts_per_body_pair": (float(si.size) / n_bb) if n_bb else float("nan"),
             "fabric": fabric, "stress": sigma, "com_z": float(np.sum(mass * centre[:, 2]) / mass.sum())}
 
 

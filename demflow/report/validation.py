@@ -5,6 +5,8 @@ Pages are plain HTML with PNG figures (matplotlib, Agg); the machine-readable su
 """
 from __future__ import annotations
 
+import functools
+import hashlib
 import html
 import json
 import math
@@ -48,6 +50,41 @@ def _kind_cell(checks) -> str:
     """Passes per kind, e.g. "source 3/3 · exact 2/2 · info 4"."""
     return " · ".join(f"{k} {v['total']}" if k in (INFO, MISS) else f"{k} {v['passed']}/{v['total']}"
                       for k, v in kind_counts(checks).items())
+
+
+def code_fingerprint(root: str | None = None) -> str:
+    """The code a case page was run with: the first 12 hex digits of the sha256 of every Python source of the
+    demflow package (its path and bytes, in path order; ``root`` the package folder, default this one).  An
+    installed copy of a commit and its working tree give the same fingerprint.  The report marks a page kept from
+    a run with other code (a slow case's page is kept from its last run): its numbers are not this code's until
+    it is run again."""
+    if root is None:
+        return _package_fingerprint()
+    base = Path(root)
+    h = hashlib.sha256()
+    for f in sorted(base.rglob("*.py"), key=lambda q: q.relative_to(base).as_posix()):
+        if "__pycache__" in f.parts:
+            continue
+        h.update(f.relative_to(base).as_posix().encode() + b"\0")
+        h.update(f.read_bytes() + b"\0")
+    return h.hexdigest()[:12]
+
+
+@functools.lru_cache(maxsize=None)
+def _package_fingerprint() -> str:
+    """This package's fingerprint, computed once per process (the code that process runs)."""
+    return code_fingerprint(str(Path(__file__).resolve().parents[1]))
+
+
+def other_code(entry: dict, current: str) -> str:
+    """Why a summary entry's page is not this code's result ('' when it was run with ``current``)."""
+    made = entry.get("code")
+    if made == current:
+        return ""
+    if made is None:
+        return ("run before pages recorded their code (code unknown): its numbers may not be this code's; "
+                "re-run it to refresh")
+    return f"run with other code ({made}; this report's is {current}): its numbers may not be this code's; re-run it"
 
 
 def _strict(obj):
@@ -121,7 +158,7 @@ def _run_case(case, p, casedir: Path) -> dict:
               for t, df in case.tables(run, p)]
     physics = {v: describe(r.meta["physics"]) for v, r in run.results.items()
                if isinstance(getattr(r, "meta", None), dict) and r.meta.get("physics")}
-    return dict(physics=physics,
+    return dict(physics=physics, code=code_fingerprint(),
                 run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title, source=case.source,
                 params=p, wall_time_s=round(wall, 3), tables=tables,
                 passed=all(c.passed for c in counted(checks)), assumptions=list(case.assumptions), figures=figs,
@@ -144,7 +181,8 @@ def _failed_entry(case, p, err: Exception) -> dict:
     why = f"{type(err).__name__}: {err}"
     check = dict(name="the case runs to completion", value=0.0, reference=1.0, error=1.0, tolerance=0.0,
                  passed=False, source=case.source, why=why[:2000], relative=False, kind="self-consistency")
-    return dict(physics={}, run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow), title=case.title,
+    return dict(physics={}, code=code_fingerprint(), run_at=time.strftime("%Y-%m-%d %H:%M:%S"), slow=bool(case.slow),
+                title=case.title,
                 source=case.source, params=p, wall_time_s=0.0, tables=[], passed=False,
                 assumptions=list(case.assumptions), figures=[], counts=kind_counts([check]), checks=[check])
 
@@ -184,14 +222,21 @@ def _mark(ch):
 
 def write_report(summary, outdir="reports/validation"):
     outdir = Path(outdir)
+    current = code_fingerprint()
+    summary["code"] = current
     rows = []
+    stale = []
     for name, c in sorted(summary["cases"].items(), key=lambda kv: list(CASES).index(kv[0])):
+        other = other_code(c, current)
+        if other:
+            stale.append(name)
         rows.append(f"<tr><td><a href='{name}/index.html'>{name}</a></td><td>{html.escape(c['title'])}</td>"
                     f"<td>{html.escape(c['source'])}</td><td>{check_counts(c['checks'])}</td>"
                     f"<td class='small'>{html.escape(_kind_cell(c['checks']))}</td>"
                     f"<td class='{'pass' if c['passed'] else 'fail'}'>{'PASS' if c['passed'] else 'FAIL'}</td>"
                     f"<td>{c['wall_time_s']}</td><td class='small'>{c.get('run_at', summary['generated'])}"
-                    f"{' (slow: runs with --all or --case; otherwise kept from its last run)' if c.get('slow') else ''}</td></tr>")
+                    f"{' (slow: runs with --all or --case; otherwise kept from its last run)' if c.get('slow') else ''}"
+                    f"{f' <span class=fail>{html.escape(other)}</span>' if other else ''}</td></tr>")
         checks = "".join(
             f"<tr><td>{html.escape(ch['name'])}</td><td>{_fmt(ch['value'])}</td><td>{_fmt(ch['reference'])}</td>"
             f"<td>{_fmt(ch['error'])}</td><td>{_fmt(ch['tolerance'])}</td>"
@@ -216,7 +261,9 @@ def write_report(summary, outdir="reports/validation"):
         page = (f"<!doctype html><html><head><meta charset='utf-8'><title>{name}</title><style>{CSS}</style></head>"
                 f"<body><p><a href='../index.html'>← all cases</a></p><h1>{html.escape(c['title'])}</h1>"
                 f"<p>Case <code>{name}</code>, source: {html.escape(c['source'])}. Parameters: <code>{params}</code>. "
-                f"Wall time {c['wall_time_s']} s. Run it: <code>demflow run {name}</code>.</p>"
+                f"Wall time {c['wall_time_s']} s, run at {html.escape(str(c.get('run_at', '')))}, code "
+                f"{html.escape(str(c.get('code', 'unknown')))}. Run it: <code>demflow run {name}</code>.</p>"
+                f"{f'<p class=fail>This page was {html.escape(other)} (demflow validate --case {name}).</p>' if other else ''}"
                 f"<h2>Assumptions (what the sources leave open)</h2><ul>{assumptions}</ul>"
                 f"<h2>Checks</h2><p class='small'>error is relative unless the reference is 0; the tolerance and why "
                 f"come from <code>demflow/tolerances.py</code>; 'info' marks an informative row (tolerance '—'), "
@@ -245,6 +292,7 @@ def write_report(summary, outdir="reports/validation"):
     summary["counts"] = kind_counts(every)
     n_val, m_val = validation_passes(every)
     summary["validation"] = {"passed": n_val, "total": m_val}
+    summary["pages_not_run_with_this_code"] = stale
     index = (f"<!doctype html><html><head><meta charset='utf-8'><title>demflow validation</title><style>{CSS}</style>"
              f"</head><body><h1>demflow validation report</h1><p>Generated {summary['generated']} "
              f"(Python {summary['python']}, {summary['machine']}). Overall: "
@@ -254,6 +302,10 @@ def write_report(summary, outdir="reports/validation"):
              f"to the very figure checked), known misses (a source figure not reproduced, with its measured cause) "
              f"and informative lines are never counted as validation.</p>"
              f"<p>Source figures (<a href='sources.html'>table</a>): {html.escape(sf)}.</p>"
+             f"<p>Code {current} (sha256 of demflow's Python sources). "
+             + (f"<span class='fail'>{len(stale)} of {len(summary['cases'])} pages were not run with this code</span> "
+                f"(kept from earlier runs, marked below; their checks are counted above as they were run): "
+                f"{html.escape(', '.join(stale))}.</p>" if stale else "Every page was run with this code.</p>") +
              f"<table><tr><th>case</th><th>what</th><th>source</th><th>checks passed</th><th>per kind</th><th></th>"
              f"<th>wall time [s]</th>"
              f"<th>run at</th></tr>{''.join(rows)}</table>{_not_run(summary)}"
