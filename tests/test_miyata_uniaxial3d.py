@@ -273,3 +273,62 @@ def test_the_reduced_variant_runs_in_the_default_validate_and_the_others_do_not(
     for name in ("miyata-uniaxial-3d-full", "miyata-uniaxial-3d-ellipsoids", "miyata-uniaxial-3d-ellipsoids-full",
                  "miyata-uniaxial-3d-ksweep", "tradeoff-miyata-uniaxial-3d"):
         assert CASES[name].slow, name
+
+
+def test_random_insertion_follows_the_liggghts_decks_rule():
+    """random_insertion (the LIGGGHTS deck's insert/pack, all_in yes): n bounding spheres wholly inside the region,
+    none overlapping, in a region as tall as the deck's; the same seed gives the same points; no room is an error."""
+    import math
+
+    from demflow.cases.miyata_uniaxial3d import bounding_radius, random_insertion
+    from demflow.engines.liggghts_uniaxial3d import PACKING
+
+    p = get_case("miyata-uniaxial-3d").merged()
+    rb = bounding_radius(p)
+    # the K = 8 cover is inscribed in the ellipsoid (semi-axes 37.1, 26.0, 18.2 cm): its bounding sphere about the
+    # centre of mass reaches past the middle semi-axis and stays inside the longest
+    assert 0.26 < rb < 0.371
+    n, L = 80, 2.0
+    pos = random_insertion(n, L, rb, np.random.default_rng(3))
+    H = n * (4.0 / 3.0 * math.pi * rb ** 3) / (PACKING * L * L) + 2.0 * rb
+    assert pos.shape == (n, 3)
+    assert np.all(pos[:, :2] >= rb) and np.all(pos[:, :2] <= L - rb)
+    assert np.all(pos[:, 2] >= 0.05 + rb) and np.all(pos[:, 2] <= 0.05 + rb + H)
+    d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=2) + np.eye(n) * 1e9
+    assert d.min() >= 2.0 * rb
+    assert np.array_equal(pos, random_insertion(n, L, rb, np.random.default_rng(3)))
+    assert not np.array_equal(pos, random_insertion(n, L, rb, np.random.default_rng(4)))
+    with pytest.raises(ValueError, match="no room"):
+        random_insertion(20, L, rb, np.random.default_rng(0), packing=5.0, max_tries=50)
+
+
+def test_insertion_option_leaves_the_lattice_and_its_checkpoints_alone(tmp_path):
+    """insertion='lattice' (the default) is the case's lattice, its checkpoint key unchanged by the option's
+    existence; 'random' moves the particles and keys its checkpoints apart; anything else is refused."""
+    from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints, insertion_scene
+    from demflow.scene import SceneError
+
+    p = get_case("miyata-uniaxial-3d").merged({"n_insert": 8})
+    lat = insertion_scene(p)
+    no_key = {k: v for k, v in p.items() if k != "insertion"}
+    assert np.array_equal(lat.clumps.x, insertion_scene(no_key).clumps.x)
+    assert ProtocolCheckpoints(tmp_path, p).dir == ProtocolCheckpoints(tmp_path, no_key).dir
+    rnd = dict(p, insertion="random")
+    assert not np.array_equal(lat.clumps.z, insertion_scene(rnd).clumps.z)
+    assert ProtocolCheckpoints(tmp_path, rnd).dir != ProtocolCheckpoints(tmp_path, p).dir
+    with pytest.raises(SceneError, match="insertion='grid'"):
+        insertion_scene(dict(p, insertion="grid"))
+
+
+def test_shear_spring_option_sets_the_law_and_keys_checkpoints_apart(tmp_path):
+    """shear_spring='total' (LIGGGHTS's Mindlin spring, capabilities row shear-spring-uniaxial) reaches every law of
+    the protocol's scenes; the default keeps the incremental spring and its checkpoint key."""
+    from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints
+
+    p = get_case("miyata-uniaxial-3d").merged({"n_insert": 8})
+    assert {law.shear_spring for law in insertion_scene(p).laws.values()} == {"incremental"}
+    tot = dict(p, shear_spring="total")
+    assert {law.shear_spring for law in insertion_scene(tot).laws.values()} == {"total"}
+    assert ProtocolCheckpoints(tmp_path, tot).dir != ProtocolCheckpoints(tmp_path, p).dir
+    no_key = {k: v for k, v in p.items() if k != "shear_spring"}
+    assert ProtocolCheckpoints(tmp_path, p).dir == ProtocolCheckpoints(tmp_path, no_key).dir

@@ -67,29 +67,80 @@ def particle_tops(sim) -> np.ndarray:
     return sim.spheres.pos[:, 2] + sim.spheres.r
 
 
-def _laws():
-    law = HertzMindlinLaw(friction=0.6, restitution=0.3)
+def _laws(p=None):
+    """Hertz-Mindlin, μ = 0.6, dashpots of e = 0.3; the Mindlin spring stored incrementally (YADE's, demflow's
+    default) unless ``p["shear_spring"]`` is "total" (LIGGGHTS's; capabilities row shear-spring-uniaxial)."""
+    law = HertzMindlinLaw(friction=0.6, restitution=0.3, shear_spring=(p or {}).get("shear_spring", "incremental"))
     return {("rock", "rock"): law, ("rock", "steel"): law}
 
 
+def bounding_radius(p) -> float:
+    """The radius of the particle's bounding sphere about its centre of mass [length]: the clump template's
+    max |c_k| + r_k, or the ellipsoid's largest semi-axis."""
+    if p.get("shape", "clumps") == "ellipsoids":
+        return float(max(MIYATA_AXES))
+    T = ClumpTemplate.ellipsoid_like(int(p["K"]), MIYATA_AXES, MIYATA_MASS)
+    return float(np.max(np.linalg.norm(T.centres, axis=1) + T.radii))
+
+
+def random_insertion(n: int, L: float, rb: float, rng, packing: float | None = None,
+                     max_tries: int = 1000) -> np.ndarray:
+    """(n, 3) centres placed the way the LIGGGHTS deck's ``fix insert/pack ... all_in yes`` places bodies
+    (:mod:`demflow.engines.liggghts_uniaxial3d`, capabilities row clumps-3d): one by one at uniform random points
+    of the region [0, L]² × [0.05, 0.05 + H + 2 rb], H = n (4/3 π rb³) / (packing L²) + 2 rb (packing the deck's
+    bounding-sphere volume fraction, 0.2), each bounding sphere (radius ``rb``) wholly inside the region and
+    overlapping none placed before (so none across the period either); a rejected point is redrawn, up to
+    ``max_tries`` times a body, else a clear error."""
+    from ..engines.liggghts_uniaxial3d import PACKING
+
+    packing = PACKING if packing is None else packing
+    H = n * (4.0 / 3.0 * math.pi * rb ** 3) / (packing * L * L) + 2.0 * rb
+    lo = np.array([rb, rb, 0.05 + rb])
+    hi = np.array([L - rb, L - rb, 0.05 + rb + H])
+    if np.any(hi < lo):
+        raise ValueError(f"random_insertion: a box of side L={L:g} cannot hold a bounding sphere of radius {rb:g} "
+                         "wholly inside it; widen the box")
+    pos = np.zeros((n, 3))
+    for k in range(n):
+        for _ in range(max_tries):
+            x = lo + (hi - lo) * rng.random(3)
+            if k == 0 or np.min(np.sum((pos[:k] - x) ** 2, axis=1)) >= (2.0 * rb) ** 2:
+                pos[k] = x
+                break
+        else:
+            raise ValueError(f"random_insertion: no room for body {k} of {n} after {max_tries} tries (bounding radius "
+                             f"{rb:g}, packing {packing:g}); lower the packing or the count")
+    return pos
+
+
 def insertion_scene(p) -> Scene3D:
-    """Clumps on a loose lattice (spacing 0.78 m, above one another) with random orientations."""
+    """Clumps on a loose lattice (spacing 0.78 m, above one another) with random orientations; with
+    ``p["insertion"] == "random"`` at the random points of :func:`random_insertion` instead (LIGGGHTS's rule)."""
     rng = np.random.default_rng(p["seed"])
     L = p["box"]
-    nx = max(1, int(L // 0.78))
-    pos = []
-    z = 0.45
-    while len(pos) < p["n_insert"]:
-        for i in range(nx):
-            for j in range(nx):
-                if len(pos) < p["n_insert"]:
-                    pos.append(((i + 0.5) * L / nx, (j + 0.5) * L / nx, z))
-        z += 0.78
-    pos = np.array(pos)
+    insertion = p.get("insertion", "lattice")
+    if insertion not in ("lattice", "random"):
+        from ..scene import SceneError
+
+        raise SceneError(f"miyata-uniaxial-3d: insertion={insertion!r} is not an insertion of this protocol; give "
+                         "'lattice' (demflow's loose lattice) or 'random' (the LIGGGHTS deck's insert/pack rule)")
+    if insertion == "random":
+        pos = random_insertion(int(p["n_insert"]), L, bounding_radius(p), rng)
+    else:
+        nx = max(1, int(L // 0.78))
+        pos = []
+        z = 0.45
+        while len(pos) < p["n_insert"]:
+            for i in range(nx):
+                for j in range(nx):
+                    if len(pos) < p["n_insert"]:
+                        pos.append(((i + 0.5) * L / nx, (j + 0.5) * L / nx, z))
+            z += 0.78
+        pos = np.array(pos)
     q = rng.normal(size=(len(pos), 4))
     q /= np.linalg.norm(q, axis=1)[:, None]
     return Scene3D(name="miyata-uniaxial-3d-settle", materials=_materials(p.get("young", 7e10), p.get("shape", "clumps")),
-                   laws=_laws(), **_particles(p, pos, q),
+                   laws=_laws(p), **_particles(p, pos, q),
                    planes=[Plane("floor", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "steel")], gravity=(0.0, 0.0, -G),
                    local_damping=p["local_damping"], box=Box(periodic_x=(0.0, L), periodic_y=(0.0, L)),
                    dt_fraction=p["dt_fraction"], outputs=Outputs3D(every=1000), allow_unsafe_dt=True)
@@ -115,7 +166,11 @@ class ProtocolCheckpoints:
         import json
         from pathlib import Path
 
-        key = hashlib.sha256(json.dumps({k: p.get(k) for k in PROTOCOL_KEYS} | {"version": PROTOCOL_VERSION}, sort_keys=True,
+        keys = {k: p.get(k) for k in PROTOCOL_KEYS}
+        for k, default in (("insertion", "lattice"), ("shear_spring", "incremental")):
+            if p.get(k, default) != default:  # the default runs keep the keys (and checkpoints) they had
+                keys[k] = p[k]
+        key = hashlib.sha256(json.dumps(keys | {"version": PROTOCOL_VERSION}, sort_keys=True,
                                         default=str).encode()).hexdigest()[:12]
         self.dir = Path(root) / f"seed{int(p['seed'])}-{key}"
         self._t0 = time.perf_counter()
@@ -197,7 +252,7 @@ def next_stage(sim, p, name: str, keep=None, plate_z: float | None = None) -> Sc
     if plate_z is not None:
         planes.append(Plane("plate", (0.0, 0.0, plate_z), (0.0, 0.0, -1.0), "steel",
                             phases=(PlanePhase(cycles=10 ** 9, velocity=(0.0, 0.0, -p["plate_speed"])),)))
-    return Scene3D(name=name, materials=_materials(p.get("young", 7e10), p.get("shape", "clumps")), laws=_laws(),
+    return Scene3D(name=name, materials=_materials(p.get("young", 7e10), p.get("shape", "clumps")), laws=_laws(p),
                    **_particles(p, pos, b.quat[keep]), planes=planes, gravity=(0.0, 0.0, -G), local_damping=p["local_damping"],
                    box=Box(periodic_x=(0.0, p["box"]), periodic_y=(0.0, p["box"])), dt_fraction=p["dt_fraction"],
                    allow_unsafe_dt=True,
@@ -617,7 +672,8 @@ class MiyataUniaxial3D(Case):
     slow = False
     params = dict(shape="clumps", box=2.0, n_insert=80, K=8, seed=1, trim=2.0, plate_speed=0.02, stress_max=600e3, dt_fraction=0.2,
                   local_damping=0.3, young=7e10, record_every=200, settle_max=400000, snapshots=10, plate_z_min=0.5, band_seeds=8,
-                  engine_refs=1, engine_seeds=2, undamped_band=1, workers=None, checkpoint_dir="", progress=None)
+                  engine_refs=1, engine_seeds=2, undamped_band=1, workers=None, checkpoint_dir="", progress=None,
+                  insertion="lattice", shear_spring="incremental")
 
     def run(self, p) -> CaseRun:
         from ..scene import SceneError

@@ -486,7 +486,11 @@ FEATURES_UNIAXIAL_3D: tuple[Feature, ...] = (
                                 "multisphere; the bed is LIGGGHTS's own (insert/pack: bodies come only from "
                                 "insertion fixes)", DIFFERS, "another random bed (compared statistically)"),
             measured="mass and moments equal the template's to 1e-12 in both engines (tests/test_uniaxial3d_yade.py, "
-                     "tests/test_uniaxial3d_liggghts.py)"),
+                     "tests/test_uniaxial3d_liggghts.py). LIGGGHTS's bed isolated: demflow's own beds inserted by the "
+                     "deck's insert/pack rule (insertion='random', demflow.cases.miyata_uniaxial3d.random_insertion), "
+                     "8 seeds without local damping, settle 71 mm at 100 kPa on average against 95 mm on demflow's "
+                     "lattice, and their band [-69, 211] mm still leaves out LIGGGHTS seed 1's 213 mm "
+                     "(benchmarks/uniaxial3d_insertion_study.py, results/uniaxial3d_insertion_study.txt, 2026-11-27)"),
     Feature("trim-3d", "removing the particles above the trim height", "the next stage is built from the kept "
             "bodies (demflow.cases.miyata_uniaxial3d.next_stage)",
             yade=Expression("deleteClumpBody, then a fresh InsertionSortCollider (2023.02a hangs after a deletion in "
@@ -514,5 +518,10 @@ FEATURES_UNIAXIAL_3D: tuple[Feature, ...] = (
             "demflow's default",
             yade=Expression("Law2_ScGeom_MindlinPhys_Mindlin: incremental", EXACT),
             liggghts=Expression("tangential history: total displacement × the current k_t", DIFFERS,
-                                "the stored force grows with the overlap under compression (feature shear-spring-3d)")),
+                                "the stored force grows with the overlap under compression (feature shear-spring-3d)"),
+            measured="isolated with demflow's shear_spring='total' (the case's parameter), 8 seeds without local "
+                     "damping: settlement at 100 kPa 101 mm on average (95 mm incremental), band [-8, 211] mm; with "
+                     "LIGGGHTS's insertion as well (its three differences together) 89 mm, band [-26, 204] mm: LIGGGHTS "
+                     "seed 1 (bed top 2.18 m, settlement 213 mm at 100 kPa) stays outside every such band, seed 2 "
+                     "inside all (benchmarks/uniaxial3d_insertion_study.py, 2026-11-27)"),
 )
