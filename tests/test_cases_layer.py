@@ -319,7 +319,8 @@ def test_validate_removes_a_figure_an_earlier_run_of_the_case_left(tmp_path):
 
 def test_a_page_kept_from_other_code_is_marked(tmp_path):
     """A page kept from a run with other code (a slow case's, kept from its last run) is marked on the index, on its
-    page and in summary.json; a page run with this code is not; the fingerprint follows the sources' bytes."""
+    page and in summary.json; a page run with this code is not; the fingerprint follows what the sources run, not
+    their comments, docstrings or layout."""
     import json as _json
 
     from demflow.report.validation import code_fingerprint, write_report
@@ -329,8 +330,12 @@ def test_a_page_kept_from_other_code_is_marked(tmp_path):
     (pkg / "a.py").write_text("x = 1\n")
     (pkg / "sub" / "b.py").write_text("y = 2\n")
     before = code_fingerprint(str(pkg))
+    (pkg / "sub" / "b.py").write_text('"""A docstring."""\n# a comment\ny  =  2   # another\n')
+    assert code_fingerprint(str(pkg)) == before  # comments, docstrings and layout are not code
     (pkg / "sub" / "b.py").write_text("y = 3\n")
     assert code_fingerprint(str(pkg)) != before and len(before) == 12
+    (pkg / "sub" / "b.py").write_text('y = 2\nprint("a message")\n')  # a string that is shown is code
+    assert code_fingerprint(str(pkg)) != before
     assert code_fingerprint() == code_fingerprint()
 
     def entry(code):

@@ -495,12 +495,23 @@ def rotate_history(hist, k, nx, ny, nz):
             hist[k, 2] = 0.0
 
 
+BLOCK = 256  # listed pairs staged per block (module docstring of sphere_forces)
+
+
 @njit
 def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio):
     """One pass over the pair list: contact forces and moments into sp.FM (force 0-2, moment 3-5;
     zeroed here) and planes.force, per-pair outputs into pairs.fn/ft/ovl/slide.  Reads the packed
     rows sp.P (:func:`pack_rows`).  Returns (status, elastic energy, energy the contacts' dashpots and
-    slip dissipated in the step, summed in pair order) — the elastic energy only when ``recording``.  A non-finite force is caught by the integrator's step-length test."""
+    slip dissipated in the step, summed in pair order) — the elastic energy only when ``recording``.  A non-finite force is caught by the integrator's step-length test.
+
+    The pass runs in blocks of BLOCK listed pairs, in three stages, so that the square roots and divisions of
+    many pairs are in flight at once (one touching pair is a few hundred instructions whose chain of square
+    roots and divisions is longer than the processor's reordering window; pair by pair they ran one after
+    the other): (1) the distance test of every sphere pair, the pairs found apart handled there, the rest
+    queued in pair order with planes and triangles; (2) for the queued sphere pairs the distance, normal and
+    overlap, and the history turned into the new tangent plane; (3) in pair order, the law and the sums.
+    Each pair's arithmetic, and the order of every sum, are those of one pass pair by pair: the same bits."""
     n = sp.P.shape[0]
     P = sp.P
     FM = sp.FM
@@ -516,131 +527,185 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     else:
         tcp, tact = np.empty((0, 3)), np.empty(0, np.int8)
     q = -1
-    for k in range(pairs.i.shape[0]):
-        i = pairs.i[k]
-        j = pairs.j[k]
-        ri = P[i, 9]
-        if j >= n + nw:  # a triangle
-            q += 1
-            w = tris.wall[j - n - nw]
-            dx = tcp[q, 0] - P[i, 0]
-            dy = tcp[q, 1] - P[i, 1]
-            dz = tcp[q, 2] - P[i, 2]
-            dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-            overlap = ri - dist
-            if not tact[q] or dist == 0.0:
-                _apart(pairs, k, min(overlap, 0.0))
+    m = pairs.i.shape[0]
+    qk = np.empty(BLOCK, np.int64)  # the queued pairs of a block, in pair order
+    qx = np.empty(BLOCK)  # sphere pairs: d (stage 1), then n (stage 2); planes and triangles: qd2 = -1
+    qy = np.empty(BLOCK)
+    qz = np.empty(BLOCK)
+    qd2 = np.empty(BLOCK)  # |d|² (stage 1), then the overlap (stage 2)
+    qdist = np.empty(BLOCK)  # sphere pairs: |d| and 1/|d| (stage 2)
+    qinv = np.empty(BLOCK)
+    qm = np.empty(BLOCK)  # sphere pairs: the effective mass and radius (stage 2)
+    qr = np.empty(BLOCK)
+    for k0 in range(0, m, BLOCK):
+        k1 = min(k0 + BLOCK, m)
+        nq = 0
+        # stage 1: the distance test
+        for k in range(k0, k1):
+            j = pairs.j[k]
+            if j < n:
+                i = pairs.i[k]
+                dx = P[j, 0] + pairs.shift[k, 0] - P[i, 0]
+                dy = P[j, 1] + pairs.shift[k, 1] - P[i, 1]
+                dz = P[j, 2] + pairs.shift[k, 2] - P[i, 2]
+                d2 = dx * dx + dy * dy + dz * dz
+                rs = P[i, 9] + P[j, 9]
+                if d2 >= rs * rs:
+                    if pairs.ovl[k] >= 0.0:  # touching last step (or listed anew): clear it once
+                        _apart(pairs, k, -1.0)
+                    if recording:
+                        pairs.ovl[k] = rs - math.sqrt(d2)
+                    elif pairs.ovl[k] != -1.0:  # written once, not every step (0.13 ms a step on 35 000 such pairs)
+                        pairs.ovl[k] = -1.0
+                    continue
+                qx[nq] = dx
+                qy[nq] = dy
+                qz[nq] = dz
+                qd2[nq] = d2
+            else:
+                qd2[nq] = -1.0
+            qk[nq] = k
+            nq += 1
+        # stage 2: normal, overlap and the history's turn of the queued sphere pairs; the roots and
+        # reciprocals first, in a loop without branches (compiled to vector instructions)
+        for t in range(nq):
+            dist = math.sqrt(abs(qd2[t]))
+            qdist[t] = dist
+            qinv[t] = 1.0 / dist
+        for t in range(nq):
+            if qd2[t] < 0.0:
                 continue
-            nx = dx / dist
-            ny = dy / dist
-            nz = dz / dist
-            ai = ri - 0.5 * overlap
-            aj = 0.0
-            vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
-            vjx = planes.vel[w, 0]
-            vjy = planes.vel[w, 1]
-            vjz = planes.vel[w, 2]
-            meff = P[i, 10]
-            rstar = ri
-            mb = planes.mat[w]
-            rmin = ri
-        elif j < n:
-            dx = P[j, 0] + pairs.shift[k, 0] - P[i, 0]
-            dy = P[j, 1] + pairs.shift[k, 1] - P[i, 1]
-            dz = P[j, 2] + pairs.shift[k, 2] - P[i, 2]
+            k = qk[t]
+            i = pairs.i[k]
+            j = pairs.j[k]
+            dist = qdist[t]
+            ri = P[i, 9]
             rj = P[j, 9]
-            d2 = dx * dx + dy * dy + dz * dz
             rs = ri + rj
-            if d2 >= rs * rs:
-                if pairs.ovl[k] >= 0.0:  # touching last step (or listed anew): clear it once
-                    _apart(pairs, k, -1.0)
-                if recording:
-                    pairs.ovl[k] = rs - math.sqrt(d2)
-                elif pairs.ovl[k] != -1.0:  # written once, not every step (0.13 ms a step on 35 000 such pairs)
-                    pairs.ovl[k] = -1.0
-                continue
-            dist = math.sqrt(d2)
-            overlap = rs - dist
-            inv = 1.0 / dist
-            nx = dx * inv
-            ny = dy * inv
-            nz = dz * inv
-            ai = ri - 0.5 * overlap
-            aj = rj - 0.5 * overlap
-            # contact-point velocities: v + ω × arm (arm_i = ai n, arm_j = -aj n)
-            vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
-            vjx, vjy, vjz = _point_velocity(P, j, -aj, nx, ny, nz)
+            qd2[t] = rs - dist
+            inv = qinv[t]
+            nx = qx[t] * inv
+            ny = qy[t] * inv
+            nz = qz[t] * inv
+            qx[t] = nx
+            qy[t] = ny
+            qz[t] = nz
+            rotate_history(hist, k, nx, ny, nz)
             mi = P[i, 10]
             mj = P[j, 10]
             if P[j, 12] != 0.0:
-                meff = mi
+                qm[t] = mi
             elif P[i, 12] != 0.0:
-                meff = mj
+                qm[t] = mj
             else:
-                meff = mi * mj / (mi + mj)
-            rstar = ri * rj / rs
-            mb = int(P[j, 11])
-            rmin = min(ri, rj)
-        else:
-            p = j - n
-            nx = -planes.normal[p, 0]
-            ny = -planes.normal[p, 1]
-            nz = -planes.normal[p, 2]
-            h = -((P[i, 0] - planes.point[p, 0]) * nx + (P[i, 1] - planes.point[p, 1]) * ny
-                  + (P[i, 2] - planes.point[p, 2]) * nz)
-            overlap = ri - h
-            if overlap <= 0.0:
-                _apart(pairs, k, overlap)
-                continue
-            ai = ri - 0.5 * overlap
-            aj = 0.0
-            vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
-            vjx = planes.vel[p, 0]
-            vjy = planes.vel[p, 1]
-            vjz = planes.vel[p, 2]
-            meff = P[i, 10]
-            rstar = ri
-            mb = planes.mat[p]
-            rmin = ri
-        if overlap > max_overlap_ratio * rmin:
-            status = BLOWUP_OVERLAP
-        vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
-        rotate_history(hist, k, nx, ny, nz)
-        ma = int(P[i, 11])
-        Fn, Tx, Ty, Tz, sliding, dissipated = law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn,
-                                                         vtx, vty, vtz, nx, ny, nz, dt)
-        diss += dissipated
-        fx = -Fn * nx + Tx
-        fy = -Fn * ny + Ty
-        fz = -Fn * nz + Tz
-        # moment arm × T: (a n) × T
-        cx = ny * Tz - nz * Ty
-        cy = nz * Tx - nx * Tz
-        cz = nx * Ty - ny * Tx
-        FM[i, 0] += fx
-        FM[i, 1] += fy
-        FM[i, 2] += fz
-        FM[i, 3] += ai * cx
-        FM[i, 4] += ai * cy
-        FM[i, 5] += ai * cz
-        if j < n:
-            FM[j, 0] -= fx
-            FM[j, 1] -= fy
-            FM[j, 2] -= fz
-            FM[j, 3] += aj * cx
-            FM[j, 4] += aj * cy
-            FM[j, 5] += aj * cz
-        else:
-            w = j - n if j < n + nw else tris.wall[j - n - nw]
-            planes.force[w, 0] -= fx
-            planes.force[w, 1] -= fy
-            planes.force[w, 2] -= fz
-        pairs.fn[k] = Fn
-        pairs.ft[k, 0] = Tx
-        pairs.ft[k, 1] = Ty
-        pairs.ft[k, 2] = Tz
-        pairs.ovl[k] = overlap
-        pairs.slide[k] = 1 if sliding else 0
-        if recording:
-            energy = law_energy3(law, energy, hist, k, ma, mb, rstar, overlap)
+                qm[t] = mi * mj / (mi + mj)
+            qr[t] = ri * rj / rs
+        # stage 3: the law and the sums, in pair order
+        for t in range(nq):
+            k = qk[t]
+            i = pairs.i[k]
+            j = pairs.j[k]
+            ri = P[i, 9]
+            if j >= n + nw:  # a triangle
+                q += 1
+                w = tris.wall[j - n - nw]
+                dx = tcp[q, 0] - P[i, 0]
+                dy = tcp[q, 1] - P[i, 1]
+                dz = tcp[q, 2] - P[i, 2]
+                dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+                overlap = ri - dist
+                if not tact[q] or dist == 0.0:
+                    _apart(pairs, k, min(overlap, 0.0))
+                    continue
+                nx = dx / dist
+                ny = dy / dist
+                nz = dz / dist
+                ai = ri - 0.5 * overlap
+                aj = 0.0
+                vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
+                vjx = planes.vel[w, 0]
+                vjy = planes.vel[w, 1]
+                vjz = planes.vel[w, 2]
+                meff = P[i, 10]
+                rstar = ri
+                mb = planes.mat[w]
+                rmin = ri
+                rotate_history(hist, k, nx, ny, nz)
+            elif j < n:
+                nx = qx[t]
+                ny = qy[t]
+                nz = qz[t]
+                overlap = qd2[t]
+                rj = P[j, 9]
+                ai = ri - 0.5 * overlap
+                aj = rj - 0.5 * overlap
+                # contact-point velocities: v + ω × arm (arm_i = ai n, arm_j = -aj n)
+                vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
+                vjx, vjy, vjz = _point_velocity(P, j, -aj, nx, ny, nz)
+                meff = qm[t]
+                rstar = qr[t]
+                mb = int(P[j, 11])
+                rmin = min(ri, rj)
+            else:
+                p = j - n
+                nx = -planes.normal[p, 0]
+                ny = -planes.normal[p, 1]
+                nz = -planes.normal[p, 2]
+                h = -((P[i, 0] - planes.point[p, 0]) * nx + (P[i, 1] - planes.point[p, 1]) * ny
+                      + (P[i, 2] - planes.point[p, 2]) * nz)
+                overlap = ri - h
+                if overlap <= 0.0:
+                    _apart(pairs, k, overlap)
+                    continue
+                ai = ri - 0.5 * overlap
+                aj = 0.0
+                vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
+                vjx = planes.vel[p, 0]
+                vjy = planes.vel[p, 1]
+                vjz = planes.vel[p, 2]
+                meff = P[i, 10]
+                rstar = ri
+                mb = planes.mat[p]
+                rmin = ri
+                rotate_history(hist, k, nx, ny, nz)
+            if overlap > max_overlap_ratio * rmin:
+                status = BLOWUP_OVERLAP
+            vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
+            ma = int(P[i, 11])
+            Fn, Tx, Ty, Tz, sliding, dissipated = law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn,
+                                                             vtx, vty, vtz, nx, ny, nz, dt)
+            diss += dissipated
+            fx = -Fn * nx + Tx
+            fy = -Fn * ny + Ty
+            fz = -Fn * nz + Tz
+            # moment arm × T: (a n) × T
+            cx = ny * Tz - nz * Ty
+            cy = nz * Tx - nx * Tz
+            cz = nx * Ty - ny * Tx
+            FM[i, 0] += fx
+            FM[i, 1] += fy
+            FM[i, 2] += fz
+            FM[i, 3] += ai * cx
+            FM[i, 4] += ai * cy
+            FM[i, 5] += ai * cz
+            if j < n:
+                FM[j, 0] -= fx
+                FM[j, 1] -= fy
+                FM[j, 2] -= fz
+                FM[j, 3] += aj * cx
+                FM[j, 4] += aj * cy
+                FM[j, 5] += aj * cz
+            else:
+                w = j - n if j < n + nw else tris.wall[j - n - nw]
+                planes.force[w, 0] -= fx
+                planes.force[w, 1] -= fy
+                planes.force[w, 2] -= fz
+            pairs.fn[k] = Fn
+            pairs.ft[k, 0] = Tx
+            pairs.ft[k, 1] = Ty
+            pairs.ft[k, 2] = Tz
+            pairs.ovl[k] = overlap
+            pairs.slide[k] = 1 if sliding else 0
+            if recording:
+                energy = law_energy3(law, energy, hist, k, ma, mb, rstar, overlap)
     return status, energy, diss

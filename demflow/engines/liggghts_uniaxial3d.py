@@ -73,6 +73,7 @@ from .base import (EngineFailed, EngineOutputError, EngineRun, EngineTimeout, En
                    sha256)
 from .liggghts import LiggghtsEngine, _bad_output, _numbers, _read_rows, _text, dump_blocks
 from .liggghts3d import _f, restitution_for_zeta
+from ..shapes.clump import bounding_radius
 from .uniaxial3d import CURVE_COLUMNS, SNAPSHOT_COLUMNS, per_particle_contacts, protocol_numbers, read_uniaxial_output
 
 POSITION_SPEED = 50.0  # [m/s] the plate's speed when it is brought down to its start height (touches nothing)
@@ -151,7 +152,7 @@ class LiggghtsUniaxial3DEngine(LiggghtsEngine):
         if P["record_every"] > P["settle_check_every"] or P["settle_check_every"] % P["record_every"]:
             raise EngineUnsupported("record_every must divide the settle check interval (the decks keep runs aligned "
                                     "to the record steps)")
-        N["rb"] = float(np.max(np.linalg.norm(c, axis=1) + r))  # bounding sphere about the centre of mass
+        N["rb"] = bounding_radius(c, r)  # bounding sphere about the centre of mass
         N["pair_e"] = {f"{p['a']}|{p['b']}": restitution_for_zeta(p["zn"]) for p in pairs}
         return N
 

@@ -5,6 +5,7 @@ Pages are plain HTML with PNG figures (matplotlib, Agg); the machine-readable su
 """
 from __future__ import annotations
 
+import ast
 import functools
 import hashlib
 import html
@@ -52,12 +53,30 @@ def _kind_cell(checks) -> str:
                       for k, v in kind_counts(checks).items())
 
 
+class _DropDocstrings(ast.NodeTransformer):
+    """Remove statements that are a bare string (docstrings, and string comments): they never run."""
+
+    def visit_Expr(self, node):
+        if isinstance(node.value, ast.Constant) and isinstance(node.value.value, str):
+            return None
+        return node
+
+
+def source_digest(text: str) -> bytes:
+    """What of a Python source can change a result: its syntax tree without comments, docstrings, line numbers or
+    layout (``ast.dump``).  A string a page shows (a check's message) is an expression, not a bare statement, so
+    it stays in."""
+    return ast.dump(_DropDocstrings().visit(ast.parse(text))).encode()
+
+
 def code_fingerprint(root: str | None = None) -> str:
     """The code a case page was run with: the first 12 hex digits of the sha256 of every Python source of the
-    demflow package (its path and bytes, in path order; ``root`` the package folder, default this one).  An
-    installed copy of a commit and its working tree give the same fingerprint.  The report marks a page kept from
-    a run with other code (a slow case's page is kept from its last run): its numbers are not this code's until
-    it is run again."""
+    demflow package (its path and :func:`source_digest`, in path order; ``root`` the package folder, default
+    this one).  Comments, docstrings and layout are left out, so editing them does not mark a kept page as
+    other code; any change of what runs does.  ``ast.dump`` may differ between Python minor versions: a report
+    written under another Python shows its kept pages as other code.  An installed copy of a commit and its
+    working tree give the same fingerprint.  The report marks a page kept from a run with other code (a slow
+    case's page is kept from its last run): its numbers are not this code's until it is run again."""
     if root is None:
         return _package_fingerprint()
     base = Path(root)
@@ -66,7 +85,7 @@ def code_fingerprint(root: str | None = None) -> str:
         if "__pycache__" in f.parts:
             continue
         h.update(f.relative_to(base).as_posix().encode() + b"\0")
-        h.update(f.read_bytes() + b"\0")
+        h.update(source_digest(f.read_text(encoding="utf-8")) + b"\0")
     return h.hexdigest()[:12]
 
 

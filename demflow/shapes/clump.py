@@ -234,6 +234,14 @@ def symmetric_eigen3(A) -> tuple[np.ndarray, np.ndarray]:
     return w, vecs
 
 
+def bounding_radius(centres, radii) -> float:
+    """The radius of the smallest sphere about the origin (the centre of mass of a template) that holds every
+    member: max_k |c_k| + r_k [length].  The insertion rules of demflow's uniaxial case and of the LIGGGHTS deck
+    both use it."""
+    c = np.asarray(centres, np.float64).reshape(-1, 3)
+    return float(np.max(np.linalg.norm(c, axis=1) + np.asarray(radii, np.float64).reshape(-1)))
+
+
 @dataclass(frozen=True)
 class ClumpTemplate:
     """A clump in its principal frame: member centres (K, 3) [length] and radii (K,), mass [mass] and
