@@ -1,6 +1,6 @@
 """Side-by-side speed of demflow, LIGGGHTS and YADE on the same dense frictional 2D packing.
 
-    python benchmarks/bench_engines.py [--sizes 10000 100000] [--steps S] [--rounds R]
+    python benchmarks/bench_engines.py [--sizes 10000 100000] [--steps S [S ...]] [--rounds R]
 
 The packing is bench_dem's (``make_scene``: polydisperse discs in a box of four walls,
 kn = ks = 1e6, friction 0.5, its Gaussian agitation velocities), made engine-expressible:
@@ -264,6 +264,43 @@ def equivalence(scene, S, engines, timeout):
 
 
 # ------------------------------------------------------------------ report
+
+def acceptance_lines(rows, vs_liggghts: float, vs_yade: float):
+    """Markdown lines: per size, demflow (one core) against LIGGGHTS and YADE, best round against best round,
+    each ratio judged against its target ('met' / 'NOT met')."""
+    lines = []
+    for row in rows:
+        e = row["engines"]
+        if "demflow-1" in e and "liggghts" in e:
+            rl = e["demflow-1"]["rate_wall"] / e["liggghts"]["rate_wall"]
+            txt = f"- N = {row['n']:,}: vs LIGGGHTS {rl:.2f}× ({'met' if rl >= vs_liggghts else 'NOT met'})"
+            if "yade" in e:
+                ry = e["demflow-1"]["rate_wall"] / e["yade"]["rate_wall"]
+                txt += f", vs YADE {ry:.1f}× ({'met' if ry >= vs_yade else 'NOT met'})"
+            lines.append(txt + ".")
+    return lines
+
+
+def per_round_ratios(rows, a="demflow-1", b="liggghts"):
+    """Markdown lines: the ratio rate(a)/rate(b) of the two engines' runs within each round (run back to
+    back, so both see nearly the same state of a host whose speed drifts), min / median / max over the
+    rounds per size.  A ratio of the best rounds (the tables above) can pair a fast moment of one engine
+    with a slow moment of the other; the per-round median cannot."""
+    lines = ["", f"Per-round ratio {a} / {b} (both runs of the same round), min / median / max over the rounds:", "",
+             "| N | rounds | min | median | max |", "|---|---|---|---|---|"]
+    for row in rows:
+        e = row["engines"]
+        if a not in e or b not in e:
+            continue
+        ra = {m["round"]: m["rate_wall"] for m in e[a]["rounds"]}
+        rb = {m["round"]: m["rate_wall"] for m in e[b]["rounds"]}
+        q = np.array([ra[k] / rb[k] for k in sorted(set(ra) & set(rb)) if rb[k] > 0])
+        q = q[np.isfinite(q)]
+        if q.size:
+            lines.append(f"| {row['n']:,} | {q.size} | {q.min():.2f}× | {float(np.median(q)):.2f}× | {q.max():.2f}× |")
+    return lines
+
+
 def markdown(rows, info):
     lines = [f"# demflow vs LIGGGHTS vs YADE: particle-steps per second ({info['date']})", "",
              f"Machine: {info['cores']} cores ({info['cpu']}); numba {info['numba']} "
@@ -301,15 +338,8 @@ def markdown(rows, info):
                          f"{mt('demflow-1') / mt('liggghts'):.2f}× | {mt('demflow-1') / mt('yade'):.2f}× |")
     lines += ["", "Acceptance (issue 18 item 5, one core): demflow ≥ 3× LIGGGHTS at 1e4 and 1e5 discs "
               "(earlier targets: ≥ 15× YADE).", ""]
-    for row in rows:
-        e = row["engines"]
-        if "demflow-1" in e and "liggghts" in e:
-            rl = e["demflow-1"]["rate_wall"] / e["liggghts"]["rate_wall"]
-            txt = f"- N = {row['n']:,}: vs LIGGGHTS {rl:.2f}× ({'met' if rl >= 3 else 'NOT met'})"
-            if "yade" in e:
-                ry = e["demflow-1"]["rate_wall"] / e["yade"]["rate_wall"]
-                txt += f", vs YADE {ry:.1f}× ({'met' if ry >= 15 else 'NOT met'})"
-            lines.append(txt + ".")
+    lines += acceptance_lines(rows, 3.0, 15.0)
+    lines += per_round_ratios(rows)
     lines += ["", "## Rounds (wall-clock rate; load average 1/5/15 min before the round and after each engine)", "",
               "| N | round | order | engine | rate | load before round | load after |", "|---|---|---|---|---|---|---|"]
     for row in rows:
@@ -340,8 +370,9 @@ def markdown(rows, info):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--sizes", type=int, nargs="+", default=[10000, 100000])
-    p.add_argument("--steps", type=int, default=None,
-                   help="S (the runs are S and 2S steps); default min(1000, 2e7/N): 1000 at 1e4, 200 at 1e5")
+    p.add_argument("--steps", type=int, nargs="+", default=None,
+                   help="S (the runs are S and 2S steps), one per size (the last repeats); default min(1000, 2e7/N): "
+                        "1000 at 1e4, 200 at 1e5")
     p.add_argument("--rounds", type=int, default=2, help="timing rounds (best reported)")
     p.add_argument("--relax", type=int, default=2000, help="demflow relaxation steps before the benchmark state")
     p.add_argument("--alpha", type=float, default=30.0, help="mass-proportional damping during the relaxation")
@@ -374,8 +405,8 @@ def main(argv=None):
         build(dataclasses.replace(warm, outputs=Outputs(every=25, snapshots=(0, 50)))).run(50, threads=nt).results()
 
     rows = []
-    for n in a.sizes:
-        S = a.steps or max(10, int(round(min(1000.0, 2e7 / n))))
+    for k, n in enumerate(a.sizes):
+        S = a.steps[min(k, len(a.steps) - 1)] if a.steps else max(10, int(round(min(1000.0, 2e7 / n))))
         row, scene = bench_size(n, S, a.rounds, a.relax, a.alpha, a.timeout, a.engines)
         if not a.no_check:
             print(f"  equivalence run ({S} steps, snapshots at 0 and {S}) ...", flush=True)

@@ -44,7 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numba  # noqa: E402
 
-from bench_engines import ExternalRunner  # noqa: E402
+from bench_engines import ExternalRunner, acceptance_lines, per_round_ratios  # noqa: E402
 from packing3d import dense_fcc  # noqa: E402
 from demflow import build  # noqa: E402
 from demflow.engines.liggghts3d import Liggghts3DEngine  # noqa: E402
@@ -179,13 +179,8 @@ def markdown(rows, info):
         lines += ["", "demflow 2 threads: " + ", ".join(
             f"N = {r['n']:,}: {r['engines']['demflow-2']['rate_wall']:.3e}" for r in rows if "demflow-2" in r["engines"])]
     lines += ["", "Acceptance (issue 13, one core): demflow ≥ 1.5× LIGGGHTS and ≥ 10× YADE.", ""]
-    for row in rows:
-        e = row["engines"]
-        if "demflow-1" in e and "liggghts" in e and "yade" in e:
-            rl = e["demflow-1"]["rate_wall"] / e["liggghts"]["rate_wall"]
-            ry = e["demflow-1"]["rate_wall"] / e["yade"]["rate_wall"]
-            lines.append(f"- N = {row['n']:,}: vs LIGGGHTS {rl:.2f}× ({'met' if rl >= 1.5 else 'NOT met'}), "
-                         f"vs YADE {ry:.1f}× ({'met' if ry >= 10 else 'NOT met'}).")
+    lines += acceptance_lines(rows, 1.5, 10.0)
+    lines += per_round_ratios(rows)
     lines += ["", "## Rounds (wall-clock rate per engine; load average 1/5/15 min before and after each round)", "",
               "| N | round | order | " + " | ".join(ENGINE_ORDER) + " | load before | load after |",
               "|---|---|---|" + "---|" * len(ENGINE_ORDER) + "---|---|"]

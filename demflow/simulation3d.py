@@ -478,7 +478,8 @@ class Simulation3D:
         out.update(alpha_now=self.damping.alpha_now, prev_r=self.damping.prev_r, prev_dx=self.damping.prev_dx,
                    plane_point=self.planes.point, tri_v=self.tris.v, plane_vel=self.planes.vel, plane_force=self.planes.force,
                    pair_i=self.pairs.i, pair_j=self.pairs.j, hist=self.pairs.hist, work=self.work,
-                   pair_fn=self.pairs.fn, pair_ft=self.pairs.ft, pair_ovl=self.pairs.ovl, pair_slide=self.pairs.slide)
+                   pair_fn=self.pairs.fn, pair_ft=self.pairs.ft, pair_ovl=self.pairs.ovl, pair_slide=self.pairs.slide,
+                   pair_shift=self.pairs.shift, ref=self.spheres.ref, plane_ref=self.planes.ref)
         return out
 
     def _set_state(self, s: dict) -> None:
@@ -506,7 +507,15 @@ class Simulation3D:
                                          ovl=np.array(s["pair_ovl"], np.float64) if "pair_ovl" in s else np.zeros(m),
                                          slide=np.array(s["pair_slide"], np.int8) if "pair_slide" in s
                                          else np.zeros(m, np.int8))
-        self.rebuild()
+        if all(k in s for k in ("pair_shift", "ref", "plane_ref")):
+            # the pair list as it was, with its image shifts and the positions of its build: the run goes on
+            # with the same list, the same rebuild steps and the same periodic wraps as one never stopped (a
+            # rebuild here would wrap and re-list at another step than the uninterrupted run: other bits)
+            self.pairs = self.pairs._replace(shift=np.array(s["pair_shift"], np.float64).reshape(-1, 3))
+            self.spheres.ref[:] = s["ref"]
+            self.planes.ref[:] = s["plane_ref"]
+        else:  # a checkpoint of an older demflow: list afresh
+            self.rebuild()
 
     def _copy_state(self):
         return {k: np.array(v, copy=True) for k, v in self._state_arrays().items()} | {"step": self.step}
