@@ -4,7 +4,7 @@ have crossed a periodic boundary since the last neighbour-list build.
 Why this exists: until 2026-11-27 loading a checkpoint rebuilt the pair list, which wraps the particles that left
 the box into it and restarts the rebuild schedule at the checkpoint's step.  The uninterrupted run wraps them at
 its own next rebuild; x - L + v·dt and x + v·dt - L round differently, so a resumed periodic run parted from the
-uninterrupted one by ~1e-14 and then, a granular bed being chaotic, by everything (found when the resumed
+uninterrupted one by 1e-15 to 1e-14 m and then, a granular bed being chaotic, by everything (found when the resumed
 ``miyata-uniaxial-3d-ellipsoids-full`` bed loaded differently from an earlier run of the same settled bed).
 Each scene here is taken to a step where a particle lies outside the box (crossed, not yet wrapped), checkpointed
 there, and continued both ways.
@@ -91,7 +91,11 @@ def test_a_checkpoint_of_an_older_demflow_still_loads(tmp_path):
     with np.load(path) as z:
         old = {k: z[k] for k in z.files if k not in ("pair_shift", "ref", "plane_ref")}
     np.savez(tmp_path / "old.npz", **old)
-    b = df.build(sc).load_checkpoint(tmp_path / "old.npz")
+    fresh = df.build(sc)
+    built = fresh.n_rebuilds
+    b = fresh.load_checkpoint(tmp_path / "old.npz")
     assert b.step == 300 and not _outside(b)  # listed afresh: every particle wrapped into the box
+    assert b.n_rebuilds == built + 1
+    assert df.build(sc).load_checkpoint(path).n_rebuilds == built  # a new checkpoint is taken over as it was
     b.run(100)
     assert np.isfinite(b.spheres.pos).all()
