@@ -300,6 +300,9 @@ def _tracked_pairs(scene: Scene, r):
         ia, ib = body(path, a), body(path, b)
         if ia >= n and ib >= n:
             raise SceneError(f"{path}=({a!r}, {b!r}) joins two walls; walls do not touch each other, track a disc")
+        if ia == ib:
+            raise SceneError(f"{path}=({a!r}, {b!r}) joins disc {ia} with itself; a contact joins two bodies, give "
+                             "two different discs (or a disc and 'wall:NAME')")
         if ia >= n or (ib < n and not (r[ia] > r[ib] or (r[ia] == r[ib] and ia < ib))):
             ia, ib = ib, ia
         track.append((ia, ib))

@@ -53,7 +53,7 @@ def _array(where: str, v, n: int, shape=None, dtype=np.float64) -> np.ndarray:
     a = a.astype(dtype)
     if dtype == np.float64 and not np.all(np.isfinite(a)):
         idx = tuple(int(c) for c in np.argwhere(~np.isfinite(a))[0])
-        raise SceneError(f"{where}[{', '.join(map(str, idx))}]={a[idx]!r} is not finite; give finite numbers")
+        raise SceneError(f"{where}[{', '.join(map(str, idx))}]={float(a[idx])!r} is not finite; give finite numbers")
     return a
 
 
@@ -321,7 +321,8 @@ def _skin_and_box(scene, r):
     for axis, length in (("x", lx), ("y", ly)):
         if length and length <= 2.0 * reach:
             raise SceneError(f"scene.box.periodic_{axis}: the period {length:.6g} must exceed twice the reach "
-                             f"2·r_max + skin = {reach:.6g} (minimum image); widen the box or reduce the skin")
+                             f"2·(2·r_max + skin) = {2.0 * reach:.6g} (minimum image); widen the box to more than "
+                             f"{2.0 * reach:.6g} or reduce the skin")
     _check_periodic_meshes(scene, float(r.max()) + skin)
     return skin, box
 
@@ -398,7 +399,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
     r = _array("scene.spheres.radius", s.radius, n)
     if np.any(r <= 0):
         k = int(np.argmax(r <= 0))
-        raise SceneError(f"scene.spheres.radius[{k}]={r[k]!r} must be > 0; give positive radii")
+        raise SceneError(f"scene.spheres.radius[{k}]={float(r[k])!r} must be > 0; give positive radii")
     mats = particle_materials(scene, "spheres", "sphere", s.material, n)
     names = list(scene.materials)
     index = {m: k for k, m in enumerate(names)}
@@ -412,7 +413,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
         k = int(np.argmax(mass <= 0))
         where = (f"scene.spheres.mass[{k}]" if s.mass is not None
                  else f"scene.materials[{mats[k]!r}].density (sphere {k})")
-        raise SceneError(f"{where}: sphere {k} has mass {mass[k]!r}; a mass must be > 0: give a positive density "
+        raise SceneError(f"{where}: sphere {k} has mass {float(mass[k])!r}; a mass must be > 0: give a positive density "
                          "or mass")
     vel = np.zeros((n, 3)) if s.velocity is None else _array("scene.spheres.velocity", s.velocity, n, (3,))
     angvel = (np.zeros((n, 3)) if s.angular_velocity is None

@@ -164,10 +164,13 @@ def main(argv=None):
             print(f"{'':24s} parameters: {json.dumps(c.params)}")
         return 0
     if args.cmd == "run":
+        from .cases.base import ParameterError
+        from .scene import SceneError
+
         try:
             case = get_case(args.case)
             p = case.merged(_parse_sets(args.set))
-        except KeyError as e:
+        except (KeyError, ParameterError) as e:
             print(f"demflow: {e.args[0]}", file=sys.stderr)
             return 2
         import matplotlib
@@ -175,7 +178,11 @@ def main(argv=None):
         matplotlib.use("Agg")
         out = Path(args.out or f"runs/{args.case}")
         out.mkdir(parents=True, exist_ok=True)  # (a case without result tables still draws its figures here)
-        run = case.run(p)
+        try:
+            run = case.run(p)
+        except (SceneError, ParameterError) as e:  # a parameter the case's scenes refuse (the message says why)
+            print(f"demflow: {e.args[0]}", file=sys.stderr)
+            return 2
         for variant, res in run.results.items():
             res.meta["case"], res.meta["variant"], res.meta["params"] = args.case, variant, p
             res.save(out / variant)
@@ -265,12 +272,16 @@ def main(argv=None):
     if args.cmd == "sweep":
         from .sweep import case_sweep
 
+        grid = _parse_grid(args.set)
         try:
-            get_case(args.case)
-        except KeyError as e:
+            case = get_case(args.case)
+            for key, values in grid.items():  # every value of the grid, before any run
+                for v in values:
+                    case.merged({key: v})
+        except (KeyError, ValueError) as e:
             print(f"demflow: {e.args[0]}", file=sys.stderr)
             return 2
-        table = case_sweep(args.case, _parse_grid(args.set), scheduler=args.scheduler, workers=args.workers)
+        table = case_sweep(args.case, grid, scheduler=args.scheduler, workers=args.workers)
         if args.out:
             out = Path(args.out)
             out.parent.mkdir(parents=True, exist_ok=True)

@@ -47,6 +47,10 @@ class SimulationEllipsoids(Simulation3D):
                                     self.planes, self.tris, self.loading, self.law_params, self.g, self.damping,
                                     self.dt, rec, rec_count, self.work)
 
+    def fixed_parts(self) -> dict:
+        """As :meth:`Simulation3D.fixed_parts`, with the semi-axes."""
+        return super().fixed_parts() | {"ellipsoids (semi-axes)": self.ell.axes}
+
     def deepest_overlap_now(self) -> float:
         """As :meth:`Simulation3D.deepest_overlap_now`, over the smaller of the pair's smallest semi-axes: the
         length ``scene.max_overlap`` is a fraction of for ellipsoids (:func:`_safe_step_ellipsoids`)."""

@@ -37,6 +37,16 @@ def njit_parallel(func):
     return numba.njit(parallel=True, **JIT_FLAGS)(func)
 
 
+def check_thread_count(name: str, n) -> int:
+    """``n`` as a thread count: a whole number >= 1 (ValueError naming ``name`` otherwise)."""
+    import numbers
+
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
+        raise ValueError(f"{name}={n!r} is not a number of threads; give a whole number >= 1 (at most "
+                         f"{numba.config.NUMBA_NUM_THREADS} here), or None for the default")
+    return int(n)
+
+
 def set_threads(n: int | None) -> int:
     """Set the number of threads parallel kernels use; ``None`` keeps the default.
 
@@ -45,9 +55,14 @@ def set_threads(n: int | None) -> int:
     if n is None:
         env = os.environ.get("DEMFLOW_THREADS")
         if env:
-            n = int(env)
+            try:
+                n = int(env)
+            except ValueError:
+                raise ValueError(f"DEMFLOW_THREADS={env!r} is not a whole number; set it to a number of threads "
+                                 f"in 1..{numba.config.NUMBA_NUM_THREADS}, or unset it") from None
     if n is not None:
-        if n < 1 or n > numba.config.NUMBA_NUM_THREADS:
+        check_thread_count("threads", n)
+        if n > numba.config.NUMBA_NUM_THREADS:
             raise ValueError(
                 f"threads={n} is outside 1..{numba.config.NUMBA_NUM_THREADS}; "
                 "give a number of threads this machine has"

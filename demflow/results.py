@@ -146,7 +146,9 @@ class Results:
         return t[sel].reset_index(drop=True)
 
     def save(self, out: str | os.PathLike) -> Path:
-        """Write every table as Parquet plus meta.json into directory ``out`` (atomically)."""
+        """Write every table as Parquet plus meta.json into directory ``out`` (each file atomically).  The optional
+        tables (a saturated run's fluid tables, the walls' geometry) that this result does not have are removed from
+        ``out``, so that saving over an earlier result and loading gives this result, not a mix of the two."""
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         names = TABLES + tuple(t for t in FLUID_TABLES if len(getattr(self, t)))
@@ -156,6 +158,9 @@ class Results:
         geo = self.walls.get("geometry")
         if geo is not None:
             _atomic_write(out / "wall_geometry.parquet", lambda p: geo.to_parquet(p, index=False))
+        stale = [t for t in FLUID_TABLES if t not in names] + ([] if geo is not None else ["wall_geometry"])
+        for name in stale:
+            (out / f"{name}.parquet").unlink(missing_ok=True)
         _atomic_write(out / "meta.json", lambda p: Path(p).write_text(json.dumps(self.meta, indent=2, default=str)))
         return out
 

@@ -112,8 +112,8 @@ def check_whole(path: str, v, *, ge: int = 0, le: int = MAX_WHOLE, allowed=None)
             raise SceneError(f"{path}={v!r} is not a whole number; {fix}")
         k = int(f)
     if k > le:
-        raise SceneError(f"{path}={v!r} is above {le}, the largest count demflow takes; give a whole number "
-                         f"from {ge} to {le}")
+        why = "the largest count demflow takes" if le == MAX_WHOLE else "the largest allowed here"
+        raise SceneError(f"{path}={v!r} is above {le}, {why}; give a whole number from {ge} to {le}")
     if k < ge or (allowed is not None and k not in allowed):
         raise SceneError(f"{path}={v!r} is out of range; {fix}")
     return k
@@ -588,8 +588,13 @@ class Outputs:
     def check(self, path: str = "scene.outputs") -> None:
         """Every field on its own (build checks the tracked bodies against the scene's discs and walls)."""
         check_whole(f"{path}.every", self.every)
+        seen = {}
         for k, s in enumerate(check_items(f"{path}.snapshots", self.snapshots, kinds=(tuple, list, np.ndarray))):
-            check_whole(f"{path}.snapshots[{k}]", s)
+            step = check_whole(f"{path}.snapshots[{k}]", s)
+            if step in seen:
+                raise SceneError(f"{path}.snapshots[{k}]={s!r} repeats snapshots[{seen[step]}]: a step's snapshot would "
+                                 "be kept twice (its rows doubled in the tables); give each step once")
+            seen[step] = k
         for k, pair in enumerate(check_items(f"{path}.track_pairs", self.track_pairs)):
             if not (isinstance(pair, (tuple, list)) and len(pair) == 2):
                 raise SceneError(f"{path}.track_pairs[{k}]={pair!r} is not a pair (a, b); give two bodies, each a "

@@ -21,7 +21,7 @@ from typing import Sequence
 import numpy as np
 
 from .scene import (Box, ContactModel, GlobalDamping, Material, SceneError, check_choice, check_flag, check_items,
-                    check_name, check_number, check_type, check_vector, check_whole)
+                    check_name, check_number, check_type, check_vector, check_whole, is_number)
 
 
 @dataclass
@@ -314,6 +314,9 @@ def check_scene3d(scene: Scene3D) -> None:
         check_type("scene.ellipsoids", scene.ellipsoids, Ellipsoids)
         n_spheres = len(scene.ellipsoids)
     for k, i in enumerate(o.track_spheres):
+        if is_number(i) and float(i) > n_spheres - 1 >= 0:
+            raise SceneError(f"scene.outputs.track_spheres[{k}]={i!r} is not a sphere of this scene: its spheres are "
+                             f"numbered 0 to {n_spheres - 1}")
         check_whole(f"scene.outputs.track_spheres[{k}]", i, le=max(n_spheres - 1, 0))
         if n_spheres == 0:
             raise SceneError(f"scene.outputs.track_spheres[{k}]={i!r}: the scene has no spheres to track")

@@ -16,11 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest
 from .contacts.forces import pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
 from .integrate import Q_WIDTH
+from .jit import check_thread_count
 from .scene import MAX_WHOLE, EnergyBalanceWarning, SceneError, check_whole
 from .space import wrap
 from .state import (Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
@@ -106,6 +108,7 @@ _DISC_STATE = ("x", "y", "th", "vx", "vy", "om")
 _WALL_STATE = {"wpx": "px", "wpy": "py", "wex": "ex", "wey": "ey", "wvx": "vx", "wvy": "vy", "wom": "om",
                "wcx": "cx", "wcy": "cy"}
 _PAIR_STATE = ("finder", "other", "hist")
+_LIST_STATE = ("sx", "sy", "perm", "xref", "yref", "disp_walls")  # the pair list's build (Simulation._set_state)
 _STATE = _DISC_STATE + tuple(_WALL_STATE) + _PAIR_STATE
 # wall attributes by their historical names (sim.wpx is sim.walls.px)
 _WALL_ALIASES = dict(_WALL_STATE, wh1="h1", wh2="h2", wmat="mat", wall_force="force")
@@ -257,6 +260,7 @@ class Simulation:
             area = np.pi * r * r
             self._buoyancy = -fluid.rho * area[:, None] * np.array([self.gx, self.gy])[None, :]
             self._next_solve = self.fluid.setup.start
+        self._scene_digest = scene_digest(self.fixed_parts())  # as built (demflow.checkpoint_scene)
         self.rebuild()
 
     def _walls_init(self, scene, wall_geo, wall_mat):
@@ -307,10 +311,19 @@ class Simulation:
             sx = sy = np.empty(0)
         old = self.pairs
         hist = transfer_history(old.finder, old.other, old.hist, finder, other, self.n + self.nw)
-        start, sidx = contacts_of_particles_signed(finder, other, self.n)
-        wall_pairs = np.flatnonzero(other >= self.n).astype(np.int64)
         # the steps run on the discs renumbered in spatial order (see stepping.run_steps)
         perm = spatial_order(d.x, d.y, d.r, self.skin)
+        self._install_pairs(finder, other, hist, sx, sy, perm)
+        d.xref[:] = d.x
+        d.yref[:] = d.y
+        self.disp_walls = 0.0
+        self.rebuilds += 1
+
+    def _install_pairs(self, finder, other, hist, sx, sy, perm):
+        """Make (finder, other) with its history and periodic shifts (key order) the pair list, and ``perm``
+        the discs' spatial order, with every array the steps derive from them."""
+        start, sidx = contacts_of_particles_signed(finder, other, self.n)
+        wall_pairs = np.flatnonzero(other >= self.n).astype(np.int64)
         inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p = internal_layout(finder, other, self.n, perm, start, sidx,
                                                                           wall_pairs)
         sx_p, sy_p = np.empty_like(sx), np.empty_like(sy)
@@ -323,10 +336,6 @@ class Simulation:
                            hist_p=np.empty_like(hist), sx_p=sx_p, sy_p=sy_p, start_p=start_p, sidx_p=sidx_p,
                            wall_p=wall_p, f=np.zeros((m, 3)), out=pair_outputs(m))
         self.layout = self.layout._replace(perm=perm, inv=inv)
-        d.xref[:] = d.x
-        d.yref[:] = d.y
-        self.disp_walls = 0.0
-        self.rebuilds += 1
 
     # ------------------------------------------------------------------ running
     def run(self, n_steps: int | None = None, *, checkpoint: str | os.PathLike | None = None,
@@ -340,6 +349,10 @@ class Simulation:
 
         from .progress import bar as progress_bar
 
+        if threads is not None:
+            check_thread_count("run(threads)", threads)  # (more than this machine has: capped, results unchanged)
+        if checkpoint_every is not None:
+            check_whole("run(checkpoint_every)", checkpoint_every, ge=1)
         before = numba.get_num_threads()
         want = threads or (1 if self.n < self.PARALLEL_MIN_DISCS else before)
         numba.set_num_threads(min(want, numba.config.NUMBA_NUM_THREADS))
@@ -659,16 +672,26 @@ class Simulation:
 
     # ------------------------------------------------------------------ state I/O
     def _state_arrays(self) -> dict:
-        """The dynamic state by name (the arrays themselves, not copies)."""
+        """The dynamic state by name (the arrays themselves, not copies): discs, walls, the pair list with its
+        history, and what makes the list's next steps those of a run that never stopped (its periodic shifts, the
+        discs' spatial order and positions at the list's build, the walls' travel since: :data:`_LIST_STATE`)."""
         out = {k: getattr(self.discs, k) for k in _DISC_STATE}
         out.update({k: getattr(self.walls, f) for k, f in _WALL_STATE.items()})
         out.update({k: getattr(self.pairs, k) for k in _PAIR_STATE})
         if isinstance(self.box, PeriodicBox):
             out.update(ix=self.ix, iy=self.iy)
+        out.update(sx=self.pairs.sx, sy=self.pairs.sy, perm=self.layout.perm, xref=self.discs.xref,
+                   yref=self.discs.yref, disp_walls=np.array([self.disp_walls]))
         return out
 
-    def _set_state(self, s: dict) -> None:
-        """Take over the state ``s`` (arrays by name, as :meth:`_state_arrays`) and rebuild the pair list."""
+    def _set_state(self, s: dict, relist: bool = False) -> None:
+        """Take over the state ``s`` (arrays by name, as :meth:`_state_arrays`).
+
+        A state with the pair list's build (:data:`_LIST_STATE`: a checkpoint, the last good state) gets its list back
+        as it was, with no rebuild, so that the run goes on with the same list, the same rebuild steps and the same
+        periodic wraps as one never stopped (a rebuild here would wrap and re-list at another step: x - L + v·dt and
+        x + v·dt - L round differently, and a packing is chaotic).  With ``relist`` (another stage's state, see
+        :meth:`continue_from`) or a checkpoint written before 2026-11-27 the list is rebuilt from the positions."""
         for k in _DISC_STATE:
             getattr(self.discs, k)[:] = s[k]
         for k, f in _WALL_STATE.items():
@@ -676,10 +699,18 @@ class Simulation:
         if "ix" in s:
             self.ix[:] = s["ix"]
             self.iy[:] = s["iy"]
-        self.pairs = empty_pairs(s["hist"].shape[1])._replace(
-            finder=np.array(s["finder"], np.int64), other=np.array(s["other"], np.int64),
-            hist=np.array(s["hist"], np.float64))
-        self.rebuild()
+        finder = np.array(s["finder"], np.int64)
+        other = np.array(s["other"], np.int64)
+        hist = np.array(s["hist"], np.float64)
+        if relist or any(k not in s for k in _LIST_STATE):
+            self.pairs = empty_pairs(hist.shape[1])._replace(finder=finder, other=other, hist=hist)
+            self.rebuild()
+            return
+        self._install_pairs(finder, other, hist, np.array(s["sx"], np.float64), np.array(s["sy"], np.float64),
+                            np.array(s["perm"], np.int64))
+        self.discs.xref[:] = s["xref"]
+        self.discs.yref[:] = s["yref"]
+        self.disp_walls = float(s["disp_walls"][0])
 
     def _copy_state(self):
         return {k: v.copy() for k, v in self._state_arrays().items()} | {"step": self.step}
@@ -701,13 +732,23 @@ class Simulation:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         data = self._state_arrays()
-        meta = dict(scene=self.scene.name, step=self.step, n=self.n, nw=self.nw, dt=self.dt)
+        meta = dict(scene=self.scene.name, step=self.step, n=self.n, nw=self.nw, dt=self.dt,
+                    static=self._scene_digest)
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
         os.close(fd)
         with open(tmp, "wb") as fh:
             np.savez(fh, meta=json.dumps(meta), **data)
         os.replace(tmp, path)
         return path
+
+    def fixed_parts(self) -> dict:
+        """What the scene fixes and a run does not change, by name (:mod:`demflow.checkpoint_scene`): a checkpoint
+        continues only a simulation where these are the same."""
+        d, w = self.discs, self.walls
+        return {"discs (radius, mass, inertia, damping, material)": (d.r, d.mass, d.inertia, d.C, d.Cr, d.mat),
+                "walls (extent, material)": (w.h1, w.h2, w.mat), "time step": self.dt,
+                "gravity": (self.gx, self.gy), "contact law": self.law_params, "box": repr(self.box),
+                "fluid": repr(self.scene.fluid)}
 
     def continue_from(self, other: "Simulation") -> "Simulation":
         """Take over ``other``'s dynamic state as this scene's step 0: disc positions, rotations and
@@ -728,21 +769,20 @@ class Simulation:
         self.step = 0
         if self.fluid is not None:
             self._next_solve = self.fluid.setup.start
-        self._set_state(state)
+        self._set_state(state, relist=True)
         self.walls.force[:] = other.walls.force
         return self
 
     def load_checkpoint(self, path: str | os.PathLike) -> "Simulation":
         """Restore a state written by :meth:`save_checkpoint` for the same scene."""
-        with np.load(path) as z:
-            meta = json.loads(str(z["meta"]))
-            if meta["scene"] != self.scene.name or meta["n"] != self.n or meta["nw"] != self.nw:
-                raise ValueError(
-                    f"checkpoint {path} is for scene {meta['scene']!r} with {meta['n']} discs and "
-                    f"{meta['nw']} walls, not {self.scene.name!r} ({self.n}, {self.nw}); build the same scene"
-                )
-            state = {k: z[k].copy() for k in z.files if k != "meta"}
-            self.step = int(meta["step"])
+        meta, state = read_checkpoint(path)
+        if meta["scene"] != self.scene.name or meta["n"] != self.n or meta["nw"] != self.nw:
+            raise ValueError(
+                f"checkpoint {path} is for scene {meta['scene']!r} with {meta['n']} discs and "
+                f"{meta['nw']} walls, not {self.scene.name!r} ({self.n}, {self.nw}); build the same scene"
+            )
+        check_same_scene(path, meta, self._scene_digest)
+        self.step = int(meta["step"])
         if self.fluid is not None:
             self._next_solve = max(self.step, self.fluid.setup.start)
         self._set_state(state)

@@ -18,9 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest
 from .contacts.spheres import carry_history, sphere_pairs
 from .progress import bar as progress_bar
-from .scene import EnergyBalanceWarning, SceneError, UnsafeTimeStepWarning
+from .scene import EnergyBalanceWarning, SceneError, UnsafeTimeStepWarning, check_whole
 from .simulation import ENERGY_ROUND_OFF, BlowUpError
 from .state3d import Pairs3, Records3
 from .stepping3d import BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, REBUILD, run_steps3
@@ -74,6 +75,7 @@ class Simulation3D:
         self.pairs = Pairs3(i=np.empty(0, np.int64), j=np.empty(0, np.int64), hist=np.zeros((0, width)),
                             shift=np.zeros((0, 3)), fn=np.zeros(0), ft=np.zeros((0, 3)), ovl=np.zeros(0),
                             slide=np.zeros(0, np.int8))
+        self._scene_digest = scene_digest(self.fixed_parts())  # as built (demflow.checkpoint_scene)
         self.rebuild()
 
     @property
@@ -143,6 +145,8 @@ class Simulation3D:
         if n_steps is None:
             n_steps = max(self.scene.n_steps - self.step, 0)
         self._check_run_length(n_steps)
+        if checkpoint_every is not None:
+            check_whole("run(checkpoint_every)", checkpoint_every, ge=1)
         with progress_bar(int(n_steps), self.scene.name, show=progress) as bar:
             return self._run(n_steps, checkpoint, checkpoint_every, bar)
 
@@ -530,11 +534,23 @@ class Simulation3D:
         self.save_checkpoint(path)
         return str(path)
 
+    def fixed_parts(self) -> dict:
+        """What the scene fixes and a run does not change, by name (:mod:`demflow.checkpoint_scene`): a checkpoint
+        continues only a simulation where these are the same."""
+        sp, b, pl, dm = self.spheres, self.bodies, self.planes, self.damping
+        return {"particles (radius, mass, inertia, material, fixed, body)": (sp.r, sp.mass, sp.inertia, sp.mat,
+                                                                             sp.fixed, sp.body),
+                "clumps (mass, moments, members)": (b.mass, b.moments, b.start, b.offset),
+                "walls (normals, materials, meshes)": (pl.normal, pl.mat, pl.is_mesh, self.tris.wall, self.tris.imaged),
+                "time step": self.dt, "gravity": self.g, "contact law": self.law_params, "box": self.box,
+                "damping": (dm.alpha, dm.c_abs, dm.c_rot_abs, dm.local, dm.adaptive)}
+
     def save_checkpoint(self, path: str | os.PathLike) -> Path:
         """Write the dynamic state to ``path`` (.npz) atomically (temp file + rename)."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        meta = dict(scene=self.scene.name, step=self.step, n=self.n, n_planes=self.n_planes, dt=self.dt, dim=3)
+        meta = dict(scene=self.scene.name, step=self.step, n=self.n, n_planes=self.n_planes, dt=self.dt, dim=3,
+                    static=self._scene_digest)
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
         os.close(fd)
         with open(tmp, "wb") as fh:
@@ -544,15 +560,14 @@ class Simulation3D:
 
     def load_checkpoint(self, path: str | os.PathLike) -> "Simulation3D":
         """Restore a state written by :meth:`save_checkpoint` for the same scene."""
-        with np.load(path) as z:
-            meta = json.loads(str(z["meta"]))
-            if meta.get("dim") != 3 or meta["scene"] != self.scene.name or meta["n"] != self.n \
-                    or meta["n_planes"] != self.n_planes:
-                raise ValueError(
-                    f"checkpoint {path} is for scene {meta['scene']!r} ({meta['n']} spheres, "
-                    f"{meta.get('n_planes')} planes), not {self.scene.name!r} ({self.n}, {self.n_planes}); "
-                    "build the same scene")
-            state = {k: z[k].copy() for k in z.files if k != "meta"}
-            self.step = int(meta["step"])
+        meta, state = read_checkpoint(path)
+        if meta.get("dim") != 3 or meta["scene"] != self.scene.name or meta["n"] != self.n \
+                or meta["n_planes"] != self.n_planes:
+            raise ValueError(
+                f"checkpoint {path} is for scene {meta['scene']!r} ({meta['n']} spheres, "
+                f"{meta.get('n_planes')} planes), not {self.scene.name!r} ({self.n}, {self.n_planes}); "
+                "build the same scene")
+        check_same_scene(path, meta, self._scene_digest)
+        self.step = int(meta["step"])
         self._set_state(state)
         return self

@@ -40,6 +40,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest
 from .contacts.neighbours import pairs_cell_search, transfer_history
 from .integrate import critical_time_step
 from .jit import njit
@@ -443,6 +444,15 @@ class SuperquadricSimulation:
         self.hist = np.zeros((0, HIST))
         self.out = self._outputs(0)
         self.energy_records = np.zeros((0, 3))
+        self._scene_digest = scene_digest(self.fixed_parts())  # as built (demflow.checkpoint_scene)
+
+    def fixed_parts(self) -> dict:
+        """What the scene fixes and a run does not change, by name (:mod:`demflow.checkpoint_scene`)."""
+        bd, w = self.bodies, self.walls
+        return {"particles (semi-axes, exponent, mass, inertia, damping, material)": (
+                    bd.a, bd.b, bd.n, bd.mass, bd.inertia, bd.C, bd.Cr, bd.mat),
+                "walls (extent, material)": (w.h1, w.h2, w.mat), "time step": self.dt, "gravity": (self.gx, self.gy),
+                "contact law": self.law_params, "knobs": self.knobs, "box": repr(self.box)}
 
     @staticmethod
     def _outputs(m):
@@ -634,7 +644,8 @@ class SuperquadricSimulation:
 
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        meta = dict(scene=self.scene.name, family="superquadrics", step=self.step, n=self.n, nw=self.nw, dt=self.dt)
+        meta = dict(scene=self.scene.name, family="superquadrics", step=self.step, n=self.n, nw=self.nw, dt=self.dt,
+                    static=self._scene_digest)
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
         os.close(fd)
         with open(tmp, "wb") as fh:
@@ -644,16 +655,13 @@ class SuperquadricSimulation:
 
     def load_checkpoint(self, path) -> "SuperquadricSimulation":
         """Restore a state written by :meth:`save_checkpoint` (or saved on a blow-up) for the same scene."""
-        import json
-
-        with np.load(path) as z:
-            meta = json.loads(str(z["meta"]))
-            if (meta.get("family") != "superquadrics" or meta["scene"] != self.scene.name or meta["n"] != self.n
-                    or meta["nw"] != self.nw):
-                raise ValueError(f"checkpoint {path} is for scene {meta['scene']!r} ({meta.get('family', 'discs')}, "
-                                 f"{meta['n']} particles, {meta['nw']} walls), not {self.scene.name!r} (superquadrics, "
-                                 f"{self.n}, {self.nw}); build the same scene")
-            state = {k: z[k].copy() for k in z.files if k != "meta"}
+        meta, state = read_checkpoint(path)
+        if (meta.get("family") != "superquadrics" or meta["scene"] != self.scene.name or meta["n"] != self.n
+                or meta["nw"] != self.nw):
+            raise ValueError(f"checkpoint {path} is for scene {meta['scene']!r} ({meta.get('family', 'discs')}, "
+                             f"{meta['n']} particles, {meta['nw']} walls), not {self.scene.name!r} (superquadrics, "
+                             f"{self.n}, {self.nw}); build the same scene")
+        check_same_scene(path, meta, self._scene_digest)
         self.step = int(meta["step"])
         self._set_state(state)
         return self

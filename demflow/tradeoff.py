@@ -102,6 +102,8 @@ class TradeoffStudy:
         self.observables = [str(o) for o in observables] if observables else None
         self.table: pd.DataFrame | None = None
         self.runs: list[dict] = []
+        for *_, overrides in self._jobs():  # every run's parameters of their defaults' kinds, before any run
+            c.merged(overrides)
 
     def _jobs(self):
         jobs = [("reference", None, None, dict(self.reference))]

@@ -58,11 +58,14 @@ def write_points(path, xyz: np.ndarray, data: dict) -> Path:
 
 
 def write_lines(path, start: np.ndarray, end: np.ndarray, cell_data: dict) -> Path:
-    """Contacts as VTK line cells from ``start`` to ``end`` ((m, 3) each) with cell data."""
+    """Contacts as VTK line cells from ``start`` to ``end`` ((m, 3) each) with cell data.  With no contact
+    (m = 0) the file is an empty unstructured grid with the same cell-data arrays (:func:`_write_empty_grid`)."""
     from pyevtk.hl import unstructuredGridToVTK
 
     start, end = _c(start).reshape(-1, 3), _c(end).reshape(-1, 3)
     m = start.shape[0]
+    if m == 0:
+        return _write_empty_grid(path, list(cell_data))
     pts = np.empty((2 * m, 3))
     pts[0::2], pts[1::2] = start, end
     conn = np.arange(2 * m, dtype=np.int64)
@@ -71,6 +74,30 @@ def write_lines(path, start: np.ndarray, end: np.ndarray, cell_data: dict) -> Pa
     cd = {k: _c(v) for k, v in cell_data.items()}
     return _atomic(unstructuredGridToVTK, path, _c(pts[:, 0]), _c(pts[:, 1]), _c(pts[:, 2]), connectivity=conn,
                    offsets=offsets, cell_types=types, cellData=cd)
+
+
+def _write_empty_grid(path, cell_arrays: list[str]) -> Path:
+    """An unstructured grid with no point and no cell, its cell-data arrays named (a snapshot with no contact:
+    pyevtk refuses to write an empty piece, and ParaView reads a time series best when every step has the file
+    and its arrays).  Written by hand: VTK's XML format, ASCII, a few lines; atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    arrays = "".join(f'        <DataArray type="Float64" Name="{name}" format="ascii">\n        </DataArray>\n'
+                     for name in cell_arrays)
+    text = ('<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">\n'
+            '  <UnstructuredGrid>\n    <Piece NumberOfPoints="0" NumberOfCells="0">\n'
+            '      <Points>\n        <DataArray type="Float64" NumberOfComponents="3" format="ascii">\n        </DataArray>\n'
+            '      </Points>\n      <Cells>\n'
+            '        <DataArray type="Int64" Name="connectivity" format="ascii">\n        </DataArray>\n'
+            '        <DataArray type="Int64" Name="offsets" format="ascii">\n        </DataArray>\n'
+            '        <DataArray type="UInt8" Name="types" format="ascii">\n        </DataArray>\n'
+            f'      </Cells>\n      <CellData>\n{arrays}      </CellData>\n    </Piece>\n  </UnstructuredGrid>\n'
+            '</VTKFile>\n')
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    with os.fdopen(fd, "w") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
+    return path
 
 
 def write_pvd(path, entries) -> Path:

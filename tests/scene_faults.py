@@ -571,7 +571,7 @@ def _(pick):
 def _(pick):
     sc = base_dry()
     if pick([0, 1]):
-        v = pick(BAD_WHOLE)
+        v = pick(BAD_WHOLE + [0])  # 0: the step of snapshots[0] again
         sc.outputs = _set(sc.outputs, snapshots=(0, v))
         return sc, "scene.outputs.snapshots[1]", v
     v = pick([5, None, "0, 50", 1.5])
@@ -582,7 +582,7 @@ def _(pick):
 @fault("outputs", "outputs.track_pairs")
 def _(pick):
     v = pick([(0, 3), (0, -1), (0, 7), (0, "wall:roof"), ("wall:top", "wall:bottom"), (0, 1.5), (True, 1), (0,),
-              (0, 1, 2), None, 0, (0, "top"), (0, "wall:top\n"), (0, None), (NAN, 1)])
+              (0, 1, 2), None, 0, (0, "top"), (0, "wall:top\n"), (0, None), (NAN, 1), (1, 1)])
     sc = base_dry()
     sc.outputs = _set(sc.outputs, track_pairs=((0, 1), v))
     return sc, "scene.outputs.track_pairs[1]", v

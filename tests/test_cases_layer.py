@@ -357,3 +357,49 @@ def test_a_page_kept_from_other_code_is_marked(tmp_path):
     assert "run with other code (0123456789ab" in (out / "cs-nine-disc" / "index.html").read_text()
     assert "code unknown" in (out / "thesis-one-disc" / "index.html").read_text()
     assert "not this code" not in (out / "thesis-impact" / "index.html").read_text()
+
+
+@pytest.mark.parametrize("given,expected", [("n_steps=1e3", ("n_steps", 1000)), ("dt=2e-3", ("dt", 0.002)),
+                                            ("kn=1", ("kn", 1.0))])
+def test_set_values_take_their_defaults_kind(given, expected):
+    from demflow.cli import _parse_sets
+
+    p = CASES["thesis-one-disc"].merged(_parse_sets([given]))
+    assert p[expected[0]] == expected[1] and type(p[expected[0]]) is type(expected[1])
+
+
+@pytest.mark.parametrize("case,given", [("thesis-one-disc", "n_steps=1.5"), ("thesis-one-disc", "n_steps=abc"),
+                                        ("thesis-one-disc", "dt=True"), ("thesis-one-disc", "dt=[1,2]"),
+                                        ("thesis-bem-free-rectangle", "refine=1"),
+                                        ("thesis-bem-free-rectangle", "refine=maybe")])
+def test_a_set_value_of_another_kind_is_refused_not_converted(case, given):
+    """--set n_steps=1.5 ran 1 step, refine=false ran refine=True (bool('false')), n_steps=abc gave a traceback."""
+    from demflow.cases.base import ParameterError
+    from demflow.cli import _parse_sets
+
+    key = given.split("=")[0]
+    with pytest.raises(ParameterError, match=f"parameter {key}=.* is not a"):
+        CASES[case].merged(_parse_sets([given]))
+
+
+def test_flag_words_and_comma_lists_read_as_meant():
+    from demflow.cli import _parse_sets
+
+    assert CASES["thesis-bem-free-rectangle"].merged(_parse_sets(["refine=false"]))["refine"] is False
+    assert CASES["thesis-bem-free-rectangle"].merged(_parse_sets(["refine=Off"]))["refine"] is False
+    assert CASES["miyata-uniaxial-3d-ksweep"].merged(_parse_sets(["Ks=1,3,5"]))["Ks"] == "1,3,5"
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["run", "thesis-one-disc", "--set", "n_steps=abc"], "is not a whole number"),
+    (["run", "thesis-one-disc", "--set", "n_steps=1"], "do not reach t = 5 s"),
+    (["run", "thesis-one-disc", "--set", "dt=-1"], "scene.dt=-1.0 breaks the rule dt > 0"),
+    (["sweep", "thesis-one-disc", "--set", "bogus=1,2", "--scheduler", "serial"], "has no parameter 'bogus'"),
+    (["tradeoff", "thesis-impact", "--knob", "dt=abc"], "is not a number"),
+])
+def test_cli_refuses_a_bad_parameter_in_one_line(argv, words, capsys, tmp_path):
+    from demflow.cli import main
+
+    assert main(argv + (["--out", str(tmp_path / "o")] if argv[0] == "run" else [])) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("demflow: ") and words in err and "Traceback" not in err

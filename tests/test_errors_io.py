@@ -89,6 +89,42 @@ def test_checkpoint_resume_equals_continuous_run(tmp_path):
     assert np.array_equal(full.x, resumed.x) and np.array_equal(full.om, resumed.om)
 
 
+@pytest.mark.parametrize("change,part", [(dict(radius=0.45), "discs"), (dict(dt=1e-4), "time step"),
+                                         (dict(kn=2e7), "contact law")])
+def test_a_checkpoint_of_another_scene_with_the_same_name_is_refused(tmp_path, change, part):
+    """load_checkpoint compares what the scene fixes (radii, masses, dt, walls, law, box, gravity), not only its
+    name and counts: a checkpoint written with radius 0.5 loaded into a radius-0.45 scene before without a word."""
+    def scene(radius=0.5, dt=2e-4, kn=1e7):
+        return Scene(name="same-name", discs=Discs(x=[0.5, 1.5], y=[0.5, 0.6], radius=[radius] * 2, material="d"),
+                     materials={"d": Material(density=2000.0), "w": Material()},
+                     laws={("d", "d"): LinearLaw(kn=kn, cn=1e4), ("d", "w"): LinearLaw(kn=kn, cn=1e4)},
+                     walls=[Wall("floor", point=(0, 0), direction=(1, 0), h1=-1, h2=3, material="w")], dt=dt,
+                     gravity=(0, -10), n_steps=100, outputs=Outputs(every=10))
+    build(scene()).run(50, checkpoint=tmp_path / "c.npz")
+    assert build(scene()).load_checkpoint(tmp_path / "c.npz").step == 50
+    with pytest.raises(ValueError, match=f"these parts differ from this scene's: {part}"):
+        build(scene(**change)).load_checkpoint(tmp_path / "c.npz")
+
+
+def test_a_3d_checkpoint_of_another_scene_with_the_same_name_is_refused(tmp_path):
+    import demflow as df
+
+    def scene(radius=0.1, young=7e8):
+        return df.Scene3D(name="same-name", spheres=df.Spheres(x=[0.0, 0.3], y=[0.0, 0.0], z=[0.2, 0.2],
+                                                              radius=[radius] * 2, material="rock"),
+                          materials={"rock": df.Material(density=2650.0, young=young, poisson=0.2)},
+                          laws={("rock", "rock"): df.HertzMindlinLaw(friction=0.4)}, gravity=(0.0, 0.0, -9.81),
+                          dt_fraction=0.1, outputs=df.Outputs3D(every=0))
+    a = build(scene())
+    a.run(20)
+    a.save_checkpoint(tmp_path / "c.npz")
+    assert build(scene()).load_checkpoint(tmp_path / "c.npz").step == 20
+    with pytest.raises(ValueError, match="particles"):
+        build(scene(radius=0.11)).load_checkpoint(tmp_path / "c.npz")
+    with pytest.raises(ValueError, match="contact law"):  # and the time step, which follows the stiffness
+        build(scene(young=7e9)).load_checkpoint(tmp_path / "c.npz")
+
+
 def test_tables_roundtrip_parquet(tmp_path):
     sc = _frictional_box(500)
     sc.outputs = Outputs(every=10, snapshots=(0, 500))
@@ -127,3 +163,20 @@ def test_cli_cases_run_and_validate(tmp_path):
     s = json.loads((tmp_path / "rep" / "summary.json").read_text())
     assert s["cases"]["thesis-one-disc"]["passed"]
     assert (tmp_path / "rep" / "thesis-one-disc" / "plate_force.png").exists()
+
+
+def test_loading_a_file_that_is_no_checkpoint_says_so(tmp_path):
+    (tmp_path / "notes.npz").write_text("not an archive")
+    np.savez(tmp_path / "other.npz", a=np.zeros(3))
+    for f in ("notes.npz", "other.npz"):
+        with pytest.raises(ValueError, match="is not a demflow checkpoint"):
+            build(_frictional_box(100)).load_checkpoint(tmp_path / f)
+
+
+@pytest.mark.parametrize("kw,words", [(dict(threads=0), "run\\(threads\\)=0 is not a number of threads"),
+                                      (dict(threads="2"), "run\\(threads\\)='2' is not a number of threads"),
+                                      (dict(checkpoint_every=-5), "run\\(checkpoint_every\\)=-5")])
+def test_run_refuses_a_bad_thread_count_or_checkpoint_interval(kw, words):
+    """threads=0 ran with the default, threads=-1 gave Numba's raw error, checkpoint_every=-5 was accepted."""
+    with pytest.raises(ValueError, match=words):
+        build(_frictional_box(100)).run(10, **kw)

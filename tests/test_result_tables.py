@@ -98,6 +98,29 @@ def test_v2_round_trip(tmp_path):
             pd.testing.assert_frame_equal(_tables(back)[name], df, check_exact=True, obj=name)
 
 
+def test_saving_over_an_earlier_result_leaves_no_table_of_it(tmp_path):
+    """A dry result saved where a saturated one (fluid tables) was loads as the dry one: the optional tables it does
+    not have are removed (they were left there and loaded with it before)."""
+    def result(wet):
+        r = Results(**{t: schema.empty(t) for t in ("wall_forces", "tracked", "energy", "particles", "contacts")},
+                    meta={"scene": "a"})
+        if wet:
+            ff = schema.empty("fluid_forces")
+            r.fluid_forces = schema.conform(pd.concat([ff, pd.DataFrame({c: [1] for c in ff.columns})],
+                                                      ignore_index=True), "fluid_forces")
+            r.walls = {"geometry": schema.conform(pd.DataFrame({c: [0] for c in schema.empty("wall_geometry").columns}),
+                                                  "wall_geometry")}
+        return r
+
+    result(True).save(tmp_path)
+    assert len(Results.load(tmp_path).fluid_forces) == 1 and "geometry" in Results.load(tmp_path).walls
+    result(False).save(tmp_path)
+    back = Results.load(tmp_path)
+    assert len(back.fluid_forces) == 0
+    assert back.walls == {}
+    assert not (tmp_path / "fluid_forces.parquet").exists() and not (tmp_path / "wall_geometry.parquet").exists()
+
+
 def test_v1_tables_written_then_loaded_are_upgraded(tmp_path):
     """A v1 directory (no schema_version, no fx/fy) loads as v2 with schema_origin 1."""
     res = build(_disc_on_floor(2, steps=500)).run().results()

@@ -73,6 +73,47 @@ def test_3d_state_reads_back_in_vtk(tmp_path):
     assert moved < 0.05 * sim.spheres.r.min()  # small enough to catch a line to the wrong sphere or a wrong image
 
 
+def _assert_empty_grid(path):
+    """``path`` is a VTK XML unstructured grid with no point and no cell and the contact arrays (read with the
+    standard library: meshio 5 cannot read a grid without cells; ParaView and VTK can)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    assert root.get("type") == "UnstructuredGrid"
+    piece = root.find("UnstructuredGrid/Piece")
+    assert piece.get("NumberOfPoints") == "0" and piece.get("NumberOfCells") == "0"
+    assert [a.get("Name") for a in piece.find("CellData")] == ["fn", "fs", "overlap", "sliding"]
+    assert all(not (a.text or "").strip() for a in piece.iter("DataArray"))
+
+
+def test_a_snapshot_without_contacts_writes_an_empty_contact_file(tmp_path):
+    """A snapshot where nothing touches (a disc in the air, spheres apart) writes an empty contact grid with the same
+    cell arrays beside the particles (pyevtk refuses an empty piece: it raised a bare AssertionError before)."""
+    import demflow as df
+
+    scene = df.Scene(name="one-disc", discs=df.Discs(x=[0.0], y=[1.5], radius=[1.0], material="disc"),
+                     materials={"disc": df.Material(density=2400.0), "plate": df.Material()},
+                     laws={("disc", "plate"): df.LinearLaw(kn=1e7, cn=1e5)},
+                     walls=[df.Wall("plate", point=(0, 0), direction=(1, 0), h1=-5, h2=5, material="plate")],
+                     damping=df.GlobalDamping(C=0.0), gravity=(0, -10), dt=1e-3, n_steps=10,
+                     outputs=df.Outputs(every=1, snapshots=(0,)))
+    res = build(scene).run().results()
+    assert len(res.contacts[res.contacts.step == 0]) == 0
+    files = write_results_vtk(res, tmp_path / "2d")
+    assert len(files) == 3
+    _assert_empty_grid(tmp_path / "2d" / "run_contacts_000000000.vtu")
+    assert len(meshio.read(tmp_path / "2d" / "run_particles_000000000.vtu").points) == 1
+    sim = build(df.Scene3D(name="apart", spheres=df.Spheres(x=[0.0, 1.0], y=[0.0, 0.0], z=[1.0, 1.0], radius=[0.1, 0.1],
+                                                            material="rock"),
+                           materials={"rock": df.Material(density=2650.0, young=7e8, poisson=0.2)},
+                           laws={("rock", "rock"): df.HertzMindlinLaw(friction=0.4)}, gravity=(0.0, 0.0, 0.0),
+                           outputs=df.Outputs3D(every=0)))
+    sim.run(5)
+    write_simulation3d_vtk(sim, tmp_path / "3d")
+    _assert_empty_grid(tmp_path / "3d" / "run_contacts_000000005.vtu")
+    assert not [f for f in (tmp_path / "3d").iterdir() if f.name.startswith(".") or f.suffix == ".tmp"]
+
+
 def test_a_run_shows_a_progress_bar_when_asked_and_none_in_a_pipe(capsys, monkeypatch):
     monkeypatch.setattr(progress, "DELAY_S", 0.0)
     sim = build(dataclasses.replace(g2.frictional_box(), n_steps=300))

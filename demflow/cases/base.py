@@ -17,6 +17,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ..tolerances import KINDS, VALIDATION_KINDS, tol
 
 if TYPE_CHECKING:
@@ -155,6 +157,56 @@ class ReferencePlan:
     engine: Callable[[str, str], Any] | None = None
 
 
+class ParameterError(ValueError):
+    """A case parameter given a value of another kind than its default's (the message names both and the fix)."""
+
+
+def coerce_parameter(case: str, key: str, default, value):
+    """``value`` as the type of the parameter's ``default``, refusing what would change its meaning: a whole number
+    (int default) takes an int or a float with no fraction (1e4), never 1.5; a number (float default) takes any int
+    or float; a flag (bool default) takes True/False or the words true/false/yes/no/on/off, never 'false' read as
+    True; a text takes a str, or a number or a comma list the command line read as one (``--set Ks=1,3,5``: the text
+    '1,3,5'); a list or tuple takes a list or tuple.  A default of None takes anything."""
+    import numbers
+
+    def refuse(kind: str, example: str):
+        return ParameterError(f"case {case!r}: parameter {key}={value!r} is not {kind} (its default is {default!r}); "
+                              f"give e.g. --set {key}={example}")
+
+    if default is None:
+        return value
+    if isinstance(default, bool):
+        if isinstance(value, (bool, np.bool_)):
+            return bool(value)
+        words = {"true": True, "yes": True, "on": True, "false": False, "no": False, "off": False}
+        if isinstance(value, str) and value.strip().lower() in words:
+            return words[value.strip().lower()]
+        raise refuse("a flag (True or False)", "False")
+    if isinstance(default, numbers.Integral):
+        if isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_)):
+            return int(value)
+        if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) and float(value).is_integer():
+            return int(value)
+        raise refuse("a whole number", str(default))
+    if isinstance(default, numbers.Real):
+        if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)):
+            return float(value)
+        raise refuse("a number", repr(float(default)))
+    if isinstance(default, str):
+        if isinstance(value, str):
+            return value
+        if isinstance(value, (list, tuple)) and all(isinstance(x, (numbers.Real, str)) for x in value):
+            return ",".join(str(x) for x in value)  # --set Ks=1,3,5 reads as a tuple: the text it was
+        if isinstance(value, numbers.Real):
+            return str(value)
+        raise refuse("a text", repr(default))
+    if isinstance(default, (list, tuple)):
+        if isinstance(value, (list, tuple)):
+            return type(default)(value)
+        raise refuse("a list", repr(list(default)).replace(" ", ""))
+    return value if isinstance(value, type(default)) else type(default)(value)
+
+
 class Case:
     name: str = ""
     title: str = ""
@@ -166,11 +218,13 @@ class Case:
     slow: bool = False
 
     def merged(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+        """The case's parameters with ``overrides`` (by name) put in, each of its default's type
+        (:func:`coerce_parameter`): an unknown name is a KeyError, a value of another kind a ParameterError."""
         p = dict(self.params)
         for k, v in (overrides or {}).items():
             if k not in p:
                 raise KeyError(f"case {self.name!r} has no parameter {k!r}; parameters: {sorted(p)}")
-            p[k] = type(p[k])(v) if p[k] is not None and not isinstance(v, type(p[k])) else v
+            p[k] = coerce_parameter(self.name, k, p[k], v)
         return p
 
     def scenes(self, p) -> dict:
