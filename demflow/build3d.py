@@ -88,12 +88,13 @@ def _no_bodies() -> Bodies3:
 
 def _clumps(c, index, first: int):
     """Bodies3 of the clumps and their members as particles (appended after ``first`` free spheres)."""
-    from .shapes.clump import ClumpTemplate
+    from .shapes.clump import ClumpTemplate, check_template
 
     T = c.template
     if not isinstance(T, ClumpTemplate):
         raise SceneError(f"scene.clumps.template={T!r} is not a ClumpTemplate; build one with "
                          "ClumpTemplate.ellipsoid_like(K) or ClumpTemplate.from_spheres(...)")
+    check_template("scene.clumps.template", T, SceneError)
     nb = _common_length("scene.clumps", c, ("x", "y", "z"))
     pos = np.stack([_array(f"scene.clumps.{a}", getattr(c, a), nb) for a in "xyz"], axis=1)
     q = np.tile([1.0, 0.0, 0.0, 0.0], (nb, 1)) if c.orientation is None else \

@@ -24,7 +24,11 @@ def _parse_sets(items):
 def _write_vtk(res, outdir: Path) -> None:
     from .vtk import write_results_vtk
 
-    if not hasattr(res, "particles") or res.particles.empty:
+    if not hasattr(res, "particles"):
+        print(f"no VTK for {outdir.parent.name}: a 3D trajectory has no snapshot tables to write; from Python, "
+              "demflow.vtk.write_simulation3d_vtk(sim, dir) writes a 3D simulation's state", file=sys.stderr)
+        return
+    if res.particles.empty:
         print(f"no VTK for {outdir.parent.name}: the run kept no particle snapshots (add snapshot steps to the "
               "scene's outputs)", file=sys.stderr)
         return
@@ -59,14 +63,16 @@ def build_parser() -> argparse.ArgumentParser:
                                "default parameters (override them with 'demflow run CASE --set KEY=VALUE').")
     r = sub.add_parser("run", help="run one case, save its tables and figures, print its checks", formatter_class=fmt,
                        description="Run one case with its default parameters (or overrides), save each variant's "
-                                   "result tables as parquet under OUT/VARIANT (load them with "
-                                   "demflow.results.Results.load), draw its figures into OUT and print its checks. "
+                                   "result tables as parquet under OUT/VARIANT (load a 2D result with "
+                                   "demflow.results.Results.load, a 3D trajectory (spheres.parquet) with "
+                                   "demflow.engines.base3d.Trajectory3D.load; a case whose checks need no tables "
+                                   "saves none and says so), draw its figures into OUT and print its checks. "
                                    "Exit status 0 when every counted check passes, 1 otherwise.")
     r.add_argument("case", help="the case name ('demflow cases' lists them)")
     r.add_argument("--out", default=None, help="output directory (default runs/CASE)")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override a case parameter, e.g. --set dt=1e-4 (repeatable; values are Python "
-                        "literals, else strings)")
+                   help="override a case parameter, e.g. --set dt=1e-4 (repeatable; the value must be of the "
+                        "default's kind: a whole number, a number, a flag true/false, a text or a list)")
     r.add_argument("--vtk", action="store_true",
                    help="also write each variant's snapshots as VTK for ParaView (OUT/VARIANT/vtk/run.pvd: "
                         "particles as points with radius and velocity, contacts as lines with fn, fs)")
@@ -193,7 +199,11 @@ def main(argv=None):
         for c in checks:
             mark = "MISS" if c.kind == "miss" else "info" if c.informative else "ok  " if c.passed else "FAIL"
             print(f"[{mark}] {c.name}: {c.value:.6g} (reference {c.reference:.6g}, error {c.error:.3g}, tol {c.tolerance:.3g})")
-        print(f"tables in {out}/<variant>/*.parquet; figures: {', '.join(figs)}")
+        if run.results:
+            print(f"tables in {out}/<variant>/*.parquet; figures: {', '.join(figs)}")
+        else:
+            print(f"no tables: case {args.case!r} keeps none (its checks read its runs directly)"
+                  + ("; no VTK either" if args.vtk else "") + f"; figures: {', '.join(figs)}")
         return 0 if all(c.passed for c in counted(checks)) else 1
     if args.cmd == "reference":
         from .engines import EngineError, get_engine

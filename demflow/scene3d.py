@@ -342,7 +342,9 @@ def check_scene3d(scene: Scene3D) -> None:
             raise SceneError(f"{path}.triangles has shape {t.shape} (dtype {t.dtype}); give (nt, 3) integer "
                              "vertex indices")
         if t.min() < 0 or t.max() >= len(v):
-            raise SceneError(f"{path}.triangles index vertex {int(t.max())}; there are {len(v)} vertices")
+            k, c = (int(x[0]) for x in np.nonzero((t < 0) | (t >= len(v))))
+            raise SceneError(f"{path}.triangles[{k}, {c}]={int(t[k, c])} is not a vertex index: there are {len(v)} "
+                             f"vertices, numbered 0 to {len(v) - 1}; give indices in that range")
         a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
         area2 = np.linalg.norm(np.cross(b - a, c - a), axis=1)
         if np.any(area2 <= 0):

@@ -403,3 +403,47 @@ def test_cli_refuses_a_bad_parameter_in_one_line(argv, words, capsys, tmp_path):
     assert main(argv + (["--out", str(tmp_path / "o")] if argv[0] == "run" else [])) == 2
     err = capsys.readouterr().err
     assert err.startswith("demflow: ") and words in err and "Traceback" not in err
+
+
+def test_a_mesh_index_out_of_range_is_named_where_it_is():
+    """The message named the largest index (valid) when the bad one was -1."""
+    import demflow as df
+
+    mesh = df.TriangleMesh("m", [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], [[-1, 1, 2]], "g")
+    scene = df.Scene3D(name="mesh-index", spheres=df.Spheres(x=[0.2], y=[0.2], z=[0.5], radius=[0.05], material="g"),
+                       materials={"g": df.Material(density=2800.0, young=7e9, poisson=0.2)},
+                       laws={("g", "g"): df.HertzMindlinLaw(friction=0.3)}, meshes=[mesh])
+    with pytest.raises(df.SceneError, match=r"scene.meshes\[0\].triangles\[0, 0\]=-1 is not a vertex index"):
+        df.build(scene)
+
+
+def test_cli_run_says_when_a_case_keeps_no_tables_and_refuses_parameters_without_engine_runs(capsys, tmp_path):
+    """ch3-impulse-chain keeps no result tables: run printed 'tables in OUT/<variant>/*.parquet' and ignored --vtk;
+    conformance-3d with another dt_fraction raised a ValueError traceback (its stored engine runs use 0.1)."""
+    from demflow.cli import main
+
+    main(["run", "ch3-impulse-chain", "--out", str(tmp_path / "c"), "--vtk"])
+    out = capsys.readouterr().out
+    assert "no tables: case 'ch3-impulse-chain' keeps none" in out and "no VTK either" in out
+    assert "tables in" not in out
+    assert main(["run", "conformance-3d", "--out", str(tmp_path / "k"), "--set", "dt_fraction=0.05"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("demflow: case 'conformance-3d' compares demflow with engine runs stored with")
+
+
+def test_validate_takes_the_code_fingerprint_before_any_case_runs(tmp_path):
+    """The pages' code is the code the process runs: it is taken when validate starts, not when a case ends (taken
+    at the end, a source edited while a long case ran would have been stamped on its page)."""
+    from demflow.report import run_validation
+    from demflow.report import validation
+
+    seen = {}
+
+    class _Probe(_Broken):
+        def run(self, p):
+            seen["cached"] = validation._package_fingerprint.cache_info().currsize
+            raise RuntimeError("probe")
+
+    validation._package_fingerprint.cache_clear()
+    run_validation(["thesis-one-disc"], str(tmp_path / "v"), cases={"thesis-one-disc": _Probe()})
+    assert seen["cached"] == 1

@@ -202,3 +202,41 @@ def test_clump_templates_do_not_depend_on_the_blas_kernels():
         "    T = ClumpTemplate.ellipsoid_like(K)\n"
         "    h.update(T.centres.tobytes() + T.moments.tobytes() + np.float64(T.mass).tobytes())\n"
         "print(h.hexdigest())")
+
+
+@pytest.mark.parametrize("centres,radii,kw,words", [
+    ([[0, 0, 0], [0.01, 0, 0]], [0.0, 0.01], dict(density=2800.0), r"radii\[0\]=0.0 must be > 0"),
+    ([[0, 0, 0], [0.01, 0, 0]], [-0.01, 0.01], dict(density=2800.0), r"radii\[0\]=-0.01 must be > 0"),
+    ([[0, 0, math.nan], [0.01, 0, 0]], [0.01, 0.01], dict(density=2800.0), r"centres\[0\]=.* is not finite"),
+    ([[0, 0, 0]], [0.01], dict(mass=-1.0), "mass=-1.0 must be a finite number > 0"),
+    (np.zeros((0, 3)), [], dict(mass=1.0), "give K >= 1 centres"),
+    ([[0, 0, 0], [0.01, 0, 0]], [0.01], dict(mass=1.0), "give K >= 1 centres"),
+])
+def test_a_template_of_bad_members_is_refused(centres, radii, kw, words):
+    """Radius 0 or -0.01 or a NaN centre gave a NaN template (only NumPy warnings), mass -1 negative moments, no
+    member a bare NumPy reduction error."""
+    with pytest.raises(ValueError, match=words):
+        ClumpTemplate.from_spheres(centres, radii, **kw)
+
+
+@pytest.mark.parametrize("change,words", [
+    (dict(radii=np.array([0.0])), r"scene.clumps.template.radii\[0\]=0.0 must be > 0"),
+    (dict(centres=np.array([[math.nan, 0.0, 0.0]])), r"scene.clumps.template.centres\[0\]=.* is not finite"),
+    (dict(mass=0.0), "scene.clumps.template.mass=0.0 must be a finite number > 0"),
+    (dict(moments=np.array([-1.0, 1.0, 1.0])), "scene.clumps.template.moments=.* must be three finite"),
+    (dict(centres=np.zeros((2, 3))), "scene.clumps.template: 2 centres"),
+])
+def test_build_refuses_a_bad_template_by_its_path(change, words):
+    """A template made by hand (not through from_spheres) is checked by build: a zero radius raised 'cannot convert
+    float NaN to integer' in the neighbour search, a negative one a time-step message, negative moments built."""
+    import dataclasses
+
+    import demflow as df
+
+    T = dataclasses.replace(ClumpTemplate.from_spheres([[0.0, 0.0, 0.0]], [0.01], density=2800.0), **change)
+    scene = df.Scene3D(name="bad-template", spheres=None, clumps=df.Clumps(T, x=[0.0], y=[0.0], z=[0.1], material="g"),
+                       materials={"g": df.Material(density=2800.0, young=7e9, poisson=0.2)},
+                       laws={("g", "g"): df.HertzMindlinLaw(friction=0.3)},
+                       planes=[df.Plane("floor", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "g")])
+    with pytest.raises(df.SceneError, match=words):
+        df.build(scene)

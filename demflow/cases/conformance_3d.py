@@ -29,7 +29,7 @@ import math
 from ..laws.hertz_mindlin import HertzMindlinLaw
 from ..scene import Box, Material
 from ..scene3d import Outputs3D, Plane, PlanePhase, Scene3D, Spheres
-from .base import Case, CaseRun, Check
+from .base import Case, CaseRun, Check, ParameterError
 
 CASE = "conformance-3d"
 GLASS = Material(density=2800.0, young=4.8e10, poisson=0.20)
@@ -248,8 +248,10 @@ class Conformance3D(Case):
                 elif e in stored.get(v, []):
                     res = reference.load(CASE, v, e, loader=Trajectory3D.load)
                     if res.meta.get("params") not in (None, p):
-                        raise ValueError(f"stored reference {CASE}/{v}/{e} was made with other parameters "
-                                         f"({res.meta.get('params')}); regenerate it or use the default parameters")
+                        raise ParameterError(
+                            f"case {CASE!r} compares demflow with engine runs stored with {res.meta.get('params')} "
+                            f"({CASE}/{v}/{e}); with {p} there is none to compare with: run it with the default "
+                            "parameters (demflow reference makes its runs with them)")
                     out[(v, e)] = res
         return out
 

@@ -134,6 +134,7 @@ def run_validation(names=None, outdir="reports/validation", overrides=None, case
     summary in ``outdir`` is kept for the cases not run now, so one page can be refreshed alone.
     """
     outdir = Path(outdir)
+    code_fingerprint()  # taken now, before any case runs: a source edited during the run does not become the pages' code
     names = list(names or [n for n, c in CASES.items() if include_slow or not c.slow])
     cases = dict(CASES, **(cases or {}))
     summary = dict(generated=time.strftime("%Y-%m-%d %H:%M:%S"), python=platform.python_version(),

@@ -242,6 +242,40 @@ def bounding_radius(centres, radii) -> float:
     return float(np.max(np.linalg.norm(c, axis=1) + np.asarray(radii, np.float64).reshape(-1)))
 
 
+def check_members(path: str, centres, radii, error=ValueError):
+    """Member centres (K, 3) and radii (K,) of a clump as float arrays: K >= 1, finite, radii > 0 (``error``, naming
+    ``path``, otherwise)."""
+    try:
+        c = np.asarray(centres, np.float64)
+        r = np.asarray(radii, np.float64)
+    except (TypeError, ValueError):
+        raise error(f"{path}: centres={centres!r} and radii={radii!r} are not numbers; give K centres (x, y, z) and "
+                    "K radii") from None
+    if c.ndim != 2 or c.shape[1:] != (3,) or r.ndim != 1 or r.shape[0] != c.shape[0] or r.shape[0] == 0:
+        raise error(f"{path}: {c.shape[0] if c.ndim else 0} centres of shape {c.shape} and radii of shape {r.shape}; "
+                    "give K >= 1 centres (K, 3) and K radii (K,)")
+    for name, a in (("centres", c), ("radii", r)):
+        bad = np.flatnonzero(~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1))
+        if bad.size:
+            raise error(f"{path}.{name}[{int(bad[0])}]={a[bad[0]].tolist()!r} is not finite; give finite numbers")
+    if np.any(r <= 0.0):
+        k = int(np.flatnonzero(r <= 0.0)[0])
+        raise error(f"{path}.radii[{k}]={float(r[k])!r} must be > 0; give positive member radii")
+    return c, r
+
+
+def check_template(path: str, t, error=ValueError) -> None:
+    """A template's members (:func:`check_members`), mass (finite, > 0) and principal moments (3, finite, > 0)."""
+    check_members(path, t.centres, t.radii, error)
+    m = float(t.mass) if np.ndim(t.mass) == 0 else math.nan
+    if not (math.isfinite(m) and m > 0.0):
+        raise error(f"{path}.mass={t.mass!r} must be a finite number > 0 [mass]; give the clump's mass")
+    mom = np.asarray(t.moments, np.float64)
+    if mom.shape != (3,) or not np.all(np.isfinite(mom)) or np.any(mom <= 0.0):
+        raise error(f"{path}.moments={np.asarray(t.moments).tolist()!r} must be three finite principal moments > 0 "
+                    "[mass·length²]; build the template with ClumpTemplate.from_spheres")
+
+
 @dataclass(frozen=True)
 class ClumpTemplate:
     """A clump in its principal frame: member centres (K, 3) [length] and radii (K,), mass [mass] and
@@ -258,6 +292,11 @@ class ClumpTemplate:
         """The template of a union of spheres, given its ``mass`` (the density follows) or ``density``."""
         if (mass is None) == (density is None):
             raise ValueError("give the clump's mass or its density, one of them")
+        centres, radii = check_members("ClumpTemplate.from_spheres", centres, radii)
+        for name, v in (("mass", mass), ("density", density)):
+            if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                                      and v > 0):
+                raise ValueError(f"ClumpTemplate.from_spheres: {name}={v!r} must be a finite number > 0")
         props = union_mass_properties(centres, radii, 1.0, h)
         rho = density if density is not None else mass / props["volume"]
         w, vecs = symmetric_eigen3(props["inertia"] * rho)
