@@ -472,6 +472,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
     dt_safe = _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies)
     _check_safe_step(scene, dt, dt_safe)
     d = scene.damping
+    refuse_rotational_dashpot(scene, bodies, "clumps")
     P = np.zeros((n, 16))
     P[:, 9] = r
     P[:, 10] = mass
@@ -488,6 +489,24 @@ def build3d(scene: Scene3D) -> Simulation3D:
                                          prev_dx=np.zeros((n if scene.adaptive_damping else 0, 3))))
     _refuse_initial_overlaps(sim)
     return sim
+
+
+def refuse_rotational_dashpot(scene, bodies, family: str) -> None:
+    """The absolute rotational dashpot C_rot (``GlobalDamping.C_rot``) acts on bodies that turn as a sphere
+    (equal principal moments); an aspherical body's rotation (the angular-momentum leapfrog of
+    :func:`demflow.stepping3d.body_step`) has mass-proportional damping only.  Refuse the pair instead of
+    ignoring C_rot."""
+    c_rot = float(scene.damping.C_rot)
+    if c_rot == 0.0 or bodies.pos.shape[0] == 0:
+        return
+    m = bodies.moments
+    aspherical = np.flatnonzero((m[:, 0] != m[:, 1]) | (m[:, 1] != m[:, 2]))
+    if aspherical.size:
+        raise SceneError(f"scene.damping.C_rot={c_rot:g} with aspherical {family} ({aspherical.size} of "
+                         f"{m.shape[0]} bodies have unequal principal moments, first body {int(aspherical[0])}): the "
+                         "rotational dashpot C_rot is applied to spheres and to bodies with equal principal moments "
+                         "only; give C_rot=0 and damp rotation with GlobalDamping.alpha (mass-proportional, it acts "
+                         "on the angular momentum) or with local_damping")
 
 
 def _refuse_initial_overlaps(sim: Simulation3D) -> None:

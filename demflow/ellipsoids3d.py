@@ -19,7 +19,8 @@ import numpy as np
 
 from . import libm
 from .build3d import (_array, _check_safe_step, _common_length, _law_family, _skin_and_box, _walls,
-                      particle_materials, quat_to_matrix, rayleigh_time_step, time_step_laws)
+                      particle_materials, quat_to_matrix, rayleigh_time_step, refuse_rotational_dashpot,
+                      time_step_laws)
 from .contacts.ellipsoids import WARM_COLUMNS
 from .laws.hertz_mindlin import HertzMindlin
 from .scene import SceneError
@@ -55,6 +56,8 @@ class SimulationEllipsoids(Simulation3D):
         """As :meth:`Simulation3D.deepest_overlap_now`, over the smaller of the pair's smallest semi-axes: the
         length ``scene.max_overlap`` is a fraction of for ellipsoids (:func:`_safe_step_ellipsoids`)."""
         return self._deepest_relative_to(self.ell.amin)
+
+    _clump_table = False  # every ellipsoid is a body of its own: its row in ``spheres`` is the body
 
     def tables(self, include_records: bool = True) -> dict:
         """As :meth:`Simulation3D.tables`; the ``spheres`` table (also under ``ellipsoids``) carries
@@ -161,6 +164,7 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
     rotations(q, rot)
     ell = Ellipsoids3(axes=axes, amin=amin, rot=rot)
     d = scene.damping
+    refuse_rotational_dashpot(scene, bodies, "ellipsoids")
     sim = SimulationEllipsoids(
         ellipsoids=ell, scene=scene, spheres=sp, bodies=bodies, planes=planes, tris=tris, loading=loading, law=family,
         law_params=params, box=box, dt=dt, dt_crit=dt_crit, dt_safe=dt_safe, skin=skin, gravity=scene.gravity,

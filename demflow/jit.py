@@ -7,10 +7,14 @@ same scene, same seed, same results).
 """
 from __future__ import annotations
 
+import functools
+import hashlib
 import os
 import warnings
+from pathlib import Path
 
 import numba
+from numba.core import caching as _caching
 
 # Numba vectorises loops of math calls through Intel's SVML when it finds the library (intel-cmplr-lib-rt), and SVML
 # rounds differently from libm and per CPU (demflow.libm); demflow/__init__.py asks it off before Numba is imported.
@@ -21,11 +25,110 @@ if getattr(numba.config, "USING_SVML", False):
 
 JIT_FLAGS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
-njit = numba.njit(**JIT_FLAGS)
+
+# Numba stamps a cached kernel with the content of the file that defines it, and nothing else: a kernel that
+# calls (or inlines) a helper of another module kept its old compiled code after that helper changed (found
+# 2026-11-27: run_steps_ellipsoids loaded from the cache still ran the body step of the stepping3d.py before an
+# edit).  Every kernel of demflow, and of its tests and benchmarks beside it, is therefore stamped with the
+# content of the whole package as well: any change to a demflow source recompiles every kernel once.
+_PACKAGE = Path(__file__).resolve().parent
+_STAMPED_TREES = (_PACKAGE, _PACKAGE.parent / "tests", _PACKAGE.parent / "benchmarks")
+
+
+def tree_digest(root: Path) -> str:
+    """SHA-256 of the paths (relative to ``root``) and contents of every ``*.py`` file under ``root``."""
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        h.update(f.relative_to(root).as_posix().encode() + b"\0")
+        h.update(f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+@functools.lru_cache(maxsize=None)
+def package_digest() -> str:
+    """:func:`tree_digest` of the demflow package (once per process)."""
+    return tree_digest(_PACKAGE)
+
+
+# Numba's own locators, in its order (numba.core.caching); the first that takes a file gives its cache directory
+_NUMBA_LOCATORS = [name for name in ("UserProvidedCacheLocator", "InTreeCacheLocator", "UserWideCacheLocator",
+                                     "IPythonCacheLocator", "ZipCacheLocator") if hasattr(_caching, name)]
+
+
+class PackageStampedLocator:
+    """Numba's own locator for a demflow kernel (same cache directory and file names), with the source stamp
+    (own file, whole package) instead of the own file only.  Installed through Numba's public setting
+    ``numba.config.CACHE_LOCATOR_CLASSES`` (``NUMBA_CACHE_LOCATOR_CLASSES``), ahead of the locators it names."""
+
+    def __init__(self, base):
+        self._base = base
+
+    def ensure_cache_path(self):
+        self._base.ensure_cache_path()
+
+    def get_cache_path(self):
+        return self._base.get_cache_path()
+
+    def get_source_stamp(self):
+        return (self._base.get_source_stamp(), package_digest())
+
+    def get_disambiguator(self):
+        return self._base.get_disambiguator()
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        path = Path(py_file).resolve()
+        if not any(path.is_relative_to(t) for t in _STAMPED_TREES):
+            return None
+        for name in _base_locators():
+            base = _locator_class(name).from_function(py_func, py_file)
+            if base is not None:
+                return cls(base)
+        return None
+
+
+def _locator_class(name: str):
+    """A locator named as Numba's setting names it: ``package.module.Klass`` or a class of numba.core.caching."""
+    if "." in name:
+        import importlib
+
+        module, klass = name.rsplit(".", 1)
+        return getattr(importlib.import_module(module), klass)
+    return getattr(_caching, name)
+
+
+_SELF = f"{__name__}.PackageStampedLocator"
+
+
+def _base_locators() -> list[str]:
+    """The locators after ours in the setting (a user's own list, or Numba's)."""
+    return [n.strip() for n in (numba.config.CACHE_LOCATOR_CLASSES or "").split(",") if n.strip() and n.strip() != _SELF]
+
+
+def _install_locator() -> None:
+    """Put :class:`PackageStampedLocator` first in Numba's setting (not in the environment, which child
+    processes inherit); every decorator of this module calls it, as Numba re-reads its settings from the
+    environment when that changes."""
+    user = [n.strip() for n in (numba.config.CACHE_LOCATOR_CLASSES or "").split(",") if n.strip()]
+    if user and user[0] == _SELF:
+        return
+    numba.config.CACHE_LOCATOR_CLASSES = ",".join([_SELF] + [n for n in (user or _NUMBA_LOCATORS) if n != _SELF])
+
+
+_install_locator()
+
+def njit(func):
+    """Compile ``func`` (serial) with :data:`JIT_FLAGS`, its cache stamped with the package."""
+    _install_locator()  # (the locator is chosen here, when caching is enabled)
+    return numba.njit(**JIT_FLAGS)(func)
+
 
 # Per-pair and per-disc helpers that take arrays are inlined at the Numba IR level: a compiled call
 # with array arguments updates reference counts (atomic, serialising threads) on every call.
-njit_inline = numba.njit(inline="always", **JIT_FLAGS)
+def njit_inline(func):
+    """As :func:`njit`, inlined into its callers."""
+    _install_locator()
+    return numba.njit(inline="always", **JIT_FLAGS)(func)
 
 
 # Parallel kernels and namedtuples of arrays (demflow.state): Numba 0.68 silently drops writes made
@@ -34,6 +137,7 @@ njit_inline = numba.njit(inline="always", **JIT_FLAGS)
 # So the arrays a prange loop writes are passed to it as plain arguments; structures are read only.
 def njit_parallel(func):
     """Compile ``func`` with ``parallel=True`` (its ``prange`` loops run on threads)."""
+    _install_locator()
     return numba.njit(parallel=True, **JIT_FLAGS)(func)
 
 

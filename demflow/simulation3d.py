@@ -437,18 +437,39 @@ class Simulation3D:
         """Keep the spheres' state and the touching contacts at the current step (see :meth:`tables`)."""
         self.snapshots[self.step] = self.tables(include_records=False)
 
+    # a scene of clumps has a clumps table, and its members' rows carry their clump's orientation (ellipsoids: no)
+    _clump_table = True
+
     def tables(self, include_records: bool = True) -> dict:
         """The result tables (pandas): ``spheres`` (state now), ``contacts`` (touching pairs now,
-        force on i), ``planes`` and, with ``include_records``, ``records`` (one row per recorded step)."""
+        force on i), ``planes`` and, with ``include_records``, ``records`` (one row per recorded step).
+
+        A scene with clumps also has ``clumps`` (one row per clump: id, centre of mass x, y, z (periodic
+        images undone), velocity, angular velocity (world frame), orientation q (body frame -> world), mass,
+        principal moments I1..I3 [mass·length²], members), and its ``spheres`` rows of members carry ``clump``
+        (the clump's id; -1 for a sphere of its own), the clump's orientation and ``mass`` NaN: a member has
+        no mass of its own (the clump's mass is in ``clumps``; Σ spheres.mass over free spheres + Σ
+        clumps.mass is the scene's mass)."""
         import pandas as pd
 
         sp = self.spheres
         pos = self.unwrapped_positions()
+        b = self.bodies
+        clumps = self._clump_table and b.pos.shape[0] > 0
+        quat = sp.quat
+        mass = sp.mass
+        if clumps:
+            member = sp.body >= 0
+            quat = sp.quat.copy()
+            quat[member] = b.quat[sp.body[member]]
+            mass = np.where(member, np.nan, sp.mass)
         spheres = pd.DataFrame({"id": np.arange(self.n), "x": pos[:, 0], "y": pos[:, 1], "z": pos[:, 2],
                                 "vx": sp.vel[:, 0], "vy": sp.vel[:, 1], "vz": sp.vel[:, 2],
                                 "wx": sp.angvel[:, 0], "wy": sp.angvel[:, 1], "wz": sp.angvel[:, 2],
-                                "qw": sp.quat[:, 0], "qx": sp.quat[:, 1], "qy": sp.quat[:, 2], "qz": sp.quat[:, 3],
-                                "r": sp.r, "mass": sp.mass})
+                                "qw": quat[:, 0], "qx": quat[:, 1], "qy": quat[:, 2], "qz": quat[:, 3],
+                                "r": sp.r, "mass": mass})
+        if clumps:
+            spheres["clump"] = sp.body.copy()
         p = self.pairs
         on = p.ovl > 0
         contacts = pd.DataFrame({"i": p.i[on], "j": p.j[on], "wall": p.j[on] >= self.n, "fn": p.fn[on],
@@ -459,6 +480,17 @@ class Simulation3D:
                                "pz": self.planes.point[:, 2], "fx": self.planes.force[:, 0],
                                "fy": self.planes.force[:, 1], "fz": self.planes.force[:, 2]})
         out = {"spheres": spheres, "contacts": contacts, "planes": planes}
+        if clumps:
+            img = sp.img[b.start[:-1]]  # a clump is wrapped with its members (rebuild)
+            cx = b.pos[:, 0] + img[:, 0] * self.box.lx
+            cy = b.pos[:, 1] + img[:, 1] * self.box.ly
+            out["clumps"] = pd.DataFrame({
+                "id": np.arange(b.pos.shape[0]), "x": cx, "y": cy, "z": b.pos[:, 2].copy(),
+                "vx": b.vel[:, 0], "vy": b.vel[:, 1], "vz": b.vel[:, 2],
+                "wx": b.angvel[:, 0], "wy": b.angvel[:, 1], "wz": b.angvel[:, 2],
+                "qw": b.quat[:, 0], "qx": b.quat[:, 1], "qy": b.quat[:, 2], "qz": b.quat[:, 3],
+                "mass": b.mass, "I1": b.moments[:, 0], "I2": b.moments[:, 1], "I3": b.moments[:, 2],
+                "members": np.diff(b.start)})
         if include_records:
             r = self.records()
             cols = {"step": r["step"], "t": r["step"] * self.dt, "contacts": r["contacts"],

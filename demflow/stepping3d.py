@@ -108,6 +108,7 @@ def integrate(sp, g, dmp, dt, recording, orient):
     c_abs = dmp.c_abs
     alpha_rot_abs = dmp.c_rot_abs
     local = dmp.local
+    damped = alpha != 0.0 or c_abs != 0.0 or alpha_rot_abs != 0.0 or local > 0.0  # its work: every step
     ekt = 0.0
     ekr = 0.0
     epot = 0.0
@@ -151,6 +152,8 @@ def integrate(sp, g, dmp, dt, recording, orient):
             if recording:
                 vm = 0.5 * (v0 + v1)
                 ekt += 0.5 * m * vm * vm
+            if damped:
+                vm = 0.5 * (v0 + v1)
                 wdamp += (f - sp.FM[i, a] - m * g[a]) * vm * dt - C * vm * vm * dt
         for a in range(3):
             w0 = sp.angvel[i, a]
@@ -159,6 +162,8 @@ def integrate(sp, g, dmp, dt, recording, orient):
             if recording:
                 wm = 0.5 * (w0 + w1)
                 ekr += 0.5 * I * wm * wm
+            if damped:
+                wm = 0.5 * (w0 + w1)
                 wdamp += (t - sp.FM[i, 3 + a]) * wm * dt - Cr * wm * wm * dt
         if orient:  # q <- dq(ω Δt) ⊗ q (ω in the fixed frame); only when the scene asks for orientations
             wx = sp.angvel[i, 0]
@@ -214,7 +219,9 @@ def body_step(sp, bd, g, dmp, dt, recording):
     L_{n+1/2} = L_{n-1/2} + Δt T with the orientation advanced at the half step (YADE's
     ``exactAsphericalRot``, Omelyan 1998): ω_n = I⁻¹ R_nᵀ(L_{n-1/2} + Δt T/2), q_{n+1/2} from ω_n,
     ω_{n+1/2} = I⁻¹ R_{n+1/2}ᵀ L_{n+1/2}, q_{n+1} = q_n + Δt q̇(q_{n+1/2}, ω_{n+1/2}).  Mass-proportional
-    damping acts on L as dL/dt = T - αL (its work is not in the damping record for aspherical bodies).
+    damping acts on L as dL/dt = T - αL; its work and local damping's, (T_damped - T - α L_n)·ω_n Δt, are
+    counted every step of a damped run (to O(Δt²) per step for an aspherical body; for the others exactly the
+    change of ½ m v_{n+1/2}² that damping makes).
     Returns (kinetic translation, kinetic rotation, potential,
     largest squared member step / radius², damping work)."""
     ekt = 0.0
@@ -225,6 +232,7 @@ def body_step(sp, bd, g, dmp, dt, recording):
     inv_dt = 1.0 / dt
     alpha = dmp.alpha + (dmp.alpha_now[0] if dmp.adaptive else 0.0)
     local = dmp.local
+    damped = alpha != 0.0 or dmp.c_abs != 0.0 or dmp.c_rot_abs != 0.0 or local > 0.0  # its work: every step
     for b in range(bd.pos.shape[0]):
         m = bd.mass[b]
         s0 = bd.start[b]
@@ -257,6 +265,8 @@ def body_step(sp, bd, g, dmp, dt, recording):
             if recording:
                 vm = 0.5 * (v0 + v1)
                 ekt += 0.5 * m * vm * vm
+            if damped:
+                vm = 0.5 * (v0 + v1)
                 wdamp += (f - F[a] - m * g[a]) * vm * dt - C * vm * vm * dt
         I0 = bd.moments[b, 0]
         I1 = bd.moments[b, 1]
@@ -274,6 +284,8 @@ def body_step(sp, bd, g, dmp, dt, recording):
                 if recording:
                     wm = 0.5 * (w0 + w1)
                     ekr += 0.5 * I0 * wm * wm
+                if damped:
+                    wm = 0.5 * (w0 + w1)
                     wdamp += (t - T[a]) * wm * dt - Cr * wm * wm * dt
             wx = bd.angvel[b, 0]
             wy = bd.angvel[b, 1]
@@ -286,6 +298,7 @@ def body_step(sp, bd, g, dmp, dt, recording):
                 qi = 1.0 / math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
                 qw, qx, qy, qz = nw * qi, nx * qi, ny * qi, nz * qi
         else:
+            T0x, T0y, T0z = T[0], T[1], T[2]  # the contacts' moment, before local damping
             for a in range(3):
                 if local > 0.0:
                     s = T[a] * bd.angvel[b, a]
@@ -302,9 +315,19 @@ def body_step(sp, bd, g, dmp, dt, recording):
             if recording:
                 ekr += 0.5 * (wbx * lx + wby * ly + wbz * lz)
             # L_{n+1/2}, with mass-proportional damping dL/dt = T - αL
+            Lmx = 0.5 * bd.L[b, 0]
+            Lmy = 0.5 * bd.L[b, 1]
+            Lmz = 0.5 * bd.L[b, 2]
             for a in range(3):
                 L0 = bd.L[b, a]
                 bd.L[b, a] = ((inv_dt - 0.5 * alpha) * L0 + T[a]) / (inv_dt + 0.5 * alpha)
+            if damped:  # the damping moment (T_damped - T) - α L_n, L_n ≈ (L_{n-1/2} + L_{n+1/2})/2, times ω_n Δt
+                Lmx += 0.5 * bd.L[b, 0]
+                Lmy += 0.5 * bd.L[b, 1]
+                Lmz += 0.5 * bd.L[b, 2]
+                ox, oy, oz = _rot(qw, qx, qy, qz, wbx, wby, wbz, False)
+                wdamp += dt * ((T[0] - T0x - alpha * Lmx) * ox + (T[1] - T0y - alpha * Lmy) * oy
+                               + (T[2] - T0z - alpha * Lmz) * oz)
             # q_{n+1/2} = q_n + Δt/2 · ½ q_n ⊗ (0, ω_n)
             dw, dx, dy, dz = _qmul(qw, qx, qy, qz, 0.0, wbx, wby, wbz)
             hw, hx, hy, hz = qw + 0.25 * dt * dw, qx + 0.25 * dt * dx, qy + 0.25 * dt * dy, qz + 0.25 * dt * dz
@@ -463,7 +486,7 @@ def run_steps3(n_steps, step0, skin, sp, bodies, pairs, planes, tris, ld, law, g
     """Run up to ``n_steps`` steps from step ``step0``; stop early for a rebuild or a blow-up.
 
     ``work`` (4,) accumulates the work done on the free spheres by the planes and the fixed spheres
-    (every step) [0] and by damping (recorded steps only) [1], and the energy the contacts dissipated [3]
+    (every step) [0] and by damping (every step of a damped run) [1], and the energy the contacts dissipated [3]
     (the energy balance; [2] is an ellipsoid scene's).  Returns (steps done, status, records written)."""
     limit2 = (0.5 * skin) ** 2
     for s in range(n_steps):

@@ -145,6 +145,28 @@ def test_sphere_pairs_match_brute_force(px, py):
         assert fast[2][:, 0].any()  # and pairs across the periodic boundary
 
 
+def test_sphere_pairs_of_a_sparse_periodic_bed_two_cells_deep_return():
+    """A few spheres in a wide periodic box spread over two cells in z: more cells than ~8 per sphere, and the
+    count of z cells, halved as nc // 2 + 1, stayed at 2 for ever (two clumps that collided in a 1 × 1 m periodic
+    box hung the run, 2026-11-27).  Run in a subprocess so that a regression fails instead of hanging the suite."""
+    import subprocess
+    import sys
+
+    code = ("import numpy as np\n"
+            "from demflow.contacts.spheres import sphere_pairs, sphere_pairs_brute_force\n"
+            "from demflow.state3d import Box3\n"
+            "pos = np.array([[0.2, 0.3, 0.5], [0.7, 0.6, 0.65], [0.4, 0.8, 0.58]])\n"
+            "r = np.full(3, 0.05)\n"
+            "box = Box3(periodic_x=True, periodic_y=True, x0=0.0, y0=0.0, lx=1.0, ly=1.0)\n"
+            "e = np.zeros((0, 3))\n"
+            "fast = sphere_pairs(pos, r, 0.01, box, e, e)\n"
+            "slow = sphere_pairs_brute_force(pos, r, 0.01, box, e, e)\n"
+            "assert all(np.array_equal(a, b) for a, b in zip(fast, slow))\n"
+            "print('listed', len(fast[0]))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0 and "listed 0" in out.stdout, out.stderr[-2000:]
+
+
 # ---------------------------------------------------------------------------- dynamics
 def _pair_scene(offset=(0.0, 0.0, 0.0), rotation=None, box=df.Box(), name="pair"):
     R = 0.01

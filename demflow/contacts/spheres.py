@@ -240,6 +240,7 @@ def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point:
     lo = np.empty(3)
     nc = np.empty(3, np.int64)
     side = np.empty(3)
+    span = np.zeros(3)
     for a in range(3):
         if periodic[a]:
             lo[a] = (box.x0, box.y0)[a]
@@ -247,15 +248,16 @@ def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point:
             side[a] = period[a] / nc[a]
         else:
             lo[a] = pos[:, a].min() if n else 0.0
-            span = (pos[:, a].max() - lo[a]) if n else 0.0
-            nc[a] = max(1, int(span // side0) + 1)
+            span[a] = (pos[:, a].max() - lo[a]) if n else 0.0
+            nc[a] = max(1, int(span[a] // side0) + 1)
             side[a] = side0
-    # sparse scenes: never more cells than ~8 per sphere
+    # sparse scenes: never more cells than ~8 per sphere.  The cells a doubled side needs are counted afresh from
+    # the span (halving the count, nc // 2 + 1, stayed at 2 for ever: a sparse periodic bed two cells deep hung here)
     while nc.prod() > 8 * max(n, 1) + 27:
         for a in range(3):
             if not periodic[a] and nc[a] > 1:
                 side[a] *= 2.0
-                nc[a] = max(1, int(nc[a] // 2) + 1)
+                nc[a] = max(1, int(span[a] // side[a]) + 1)
         if all(periodic[a] or nc[a] == 1 for a in range(3)):
             break
     e_i = np.empty(0, np.int64)
