@@ -140,6 +140,12 @@ def _law_family(scene, mats, names, index, walls):
         for b in plane_mats:
             if (a, b) not in pairs and (b, a) not in pairs:
                 pairs[(a, b)] = scene.law_for(a, b)
+    if not pairs:  # nothing can touch (a lone particle, no wall): the laws declared between its materials decide
+        pairs = {k: law for k, law in scene.laws.items() if k[0] in index and k[1] in index}
+        if not pairs:
+            raise SceneError(f"scene {scene.name!r}: no particle can touch another or a wall, and scene.laws declares "
+                             f"no law between its materials ({', '.join(map(repr, used))}), so the run has no contact "
+                             f"law family; declare one, e.g. laws[({used[0]!r}, {used[0]!r})] = HertzMindlinLaw(...)")
     fams = {f for f in FAMILIES_3D for law in pairs.values() if f.accepts(law)}
     if len(fams) != 1:
         raise SceneError(f"scene {scene.name!r} mixes contact-law families ({sorted(f.name for f in fams)}) or has "

@@ -54,6 +54,21 @@ def check_same_scene(path, meta: dict, now: dict[str, str]) -> None:
             "scene, or run this one from its start")
 
 
+def write_checkpoint(path, meta: dict, state: dict):
+    """Write a checkpoint: ``meta`` (JSON) and the ``state`` arrays by name into the .npz ``path``, atomically
+    (:func:`demflow.atomic.write_atomic`); returns the path.  :func:`read_checkpoint` reads it back."""
+    import json
+    from pathlib import Path
+
+    from .atomic import write_atomic
+
+    def save(tmp):
+        with open(tmp, "wb") as fh:
+            np.savez(fh, meta=json.dumps(meta), **state)
+
+    return write_atomic(Path(path), save)
+
+
 def read_checkpoint(path) -> tuple[dict, dict]:
     """(meta, state arrays by name) of the checkpoint at ``path``; a file that is not one (another .npz, a text
     file, a truncated write) is a ValueError saying so, not NumPy's message about pickled data."""

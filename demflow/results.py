@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -37,22 +36,10 @@ import numpy as np
 import pandas as pd
 
 from . import schema
+from .atomic import write_atomic
 
 TABLES = ("wall_forces", "tracked", "energy", "particles", "contacts")
 FLUID_TABLES = ("fluid_forces", "fluid_walls", "pore_pressure")
-
-
-def _atomic_write(path: Path, write):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=path.suffix + ".tmp")
-    os.close(fd)
-    os.chmod(tmp, 0o644)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
 
 
 def save_tables(out, tables: dict, meta_name: str, meta: dict, indent: int = 2) -> Path:
@@ -61,8 +48,8 @@ def save_tables(out, tables: dict, meta_name: str, meta: dict, indent: int = 2) 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     for name, df in tables.items():
-        _atomic_write(out / f"{name}.parquet", lambda p, df=df: df.to_parquet(p, index=False))
-    _atomic_write(out / meta_name, lambda p: Path(p).write_text(json.dumps(meta, indent=indent, default=str)))
+        write_atomic(out / f"{name}.parquet", lambda p, df=df: df.to_parquet(p, index=False))
+    write_atomic(out / meta_name, lambda p: Path(p).write_text(json.dumps(meta, indent=indent, default=str)))
     return out
 
 
@@ -154,14 +141,14 @@ class Results:
         names = TABLES + tuple(t for t in FLUID_TABLES if len(getattr(self, t)))
         for name in names:
             df = getattr(self, name)
-            _atomic_write(out / f"{name}.parquet", lambda p, df=df: df.to_parquet(p, index=False))
+            write_atomic(out / f"{name}.parquet", lambda p, df=df: df.to_parquet(p, index=False))
         geo = self.walls.get("geometry")
         if geo is not None:
-            _atomic_write(out / "wall_geometry.parquet", lambda p: geo.to_parquet(p, index=False))
+            write_atomic(out / "wall_geometry.parquet", lambda p: geo.to_parquet(p, index=False))
         stale = [t for t in FLUID_TABLES if t not in names] + ([] if geo is not None else ["wall_geometry"])
         for name in stale:
             (out / f"{name}.parquet").unlink(missing_ok=True)
-        _atomic_write(out / "meta.json", lambda p: Path(p).write_text(json.dumps(self.meta, indent=2, default=str)))
+        write_atomic(out / "meta.json", lambda p: Path(p).write_text(json.dumps(self.meta, indent=2, default=str)))
         return out
 
     @classmethod

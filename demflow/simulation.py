@@ -6,7 +6,6 @@ resumable (atomic writes).
 """
 from __future__ import annotations
 
-import json
 import math
 import os
 import tempfile
@@ -16,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest
+from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.forces import pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
                                   spatial_order, transfer_history)
@@ -729,17 +728,9 @@ class Simulation:
 
     def save_checkpoint(self, path: str | os.PathLike) -> Path:
         """Write the dynamic state to ``path`` (.npz) atomically (temp file + rename)."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        data = self._state_arrays()
         meta = dict(scene=self.scene.name, step=self.step, n=self.n, nw=self.nw, dt=self.dt,
                     static=self._scene_digest)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
-        os.close(fd)
-        with open(tmp, "wb") as fh:
-            np.savez(fh, meta=json.dumps(meta), **data)
-        os.replace(tmp, path)
-        return path
+        return write_checkpoint(Path(path), meta, self._state_arrays())
 
     def fixed_parts(self) -> dict:
         """What the scene fixes and a run does not change, by name (:mod:`demflow.checkpoint_scene`): a checkpoint

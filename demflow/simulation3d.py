@@ -7,7 +7,6 @@ raises :class:`demflow.simulation.BlowUpError` with the last good state saved.
 """
 from __future__ import annotations
 
-import json
 import math
 import os
 import tempfile
@@ -18,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest
+from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.spheres import carry_history, sphere_pairs
 from .progress import bar as progress_bar
 from .scene import EnergyBalanceWarning, SceneError, UnsafeTimeStepWarning, check_whole
@@ -325,7 +324,7 @@ class Simulation3D:
         e = rec.energy[0]
         return dict(energy=kin + float(e[2]), kinetic=kin, elastic=float(e[2]),
                     pos=pos[free], mass=sp.mass[free].copy(), bpos=bpos, bmass=b.mass.copy(),
-                    work=float(work[0]), dissipated=float(work[3]))
+                    work=float(work[0]), damping=float(work[1]), dissipated=float(work[3]))
 
     def mechanical_energy(self) -> dict:
         """The energy of the current state as the energy balance counts it (:meth:`_probe_energy`, nothing
@@ -345,12 +344,12 @@ class Simulation3D:
         :meth:`demflow.simulation.Simulation._balance_close`):
 
             created = Δ(kinetic + elastic) + dissipated by the contacts (dashpots, Coulomb slip)
-                      - work of the planes and fixed spheres - work of gravity.
+                      - work of the planes and fixed spheres - work of gravity - work of the damping.
 
         A stable run creates nothing but round-off and O(Δt) discretisation; an unstable step creates
-        energy, and friction can dissipate it as fast as it grows, so that overlaps stay small.  Global,
-        local and adaptive damping only remove energy and are not counted (``created`` is then a lower
-        bound: no false alarm, a damped unstable run is seen by what its contacts dissipate).  Returns why
+        energy, and friction can dissipate it as fast as it grows, so that overlaps stay small.  The work of
+        global, local and adaptive damping (≤ 0) is the running sum the steps keep (``work[1]``, the records'
+        ``damping_work``), so that a damped run's balance closes as an undamped one's.  Returns why
         the window blew up, or None; keeps the numbers in ``energy_balance`` (and the end state in
         ``b['end_state']``, the start of the next window)."""
         end = self._probe_energy()
@@ -363,21 +362,23 @@ class Simulation3D:
                         + np.sum(start["bmass"] * ((end["bpos"] - start["bpos"]) @ g)))
         walls = end["work"] - start["work"]
         contacts = end["dissipated"] - start["dissipated"]
+        damping = end["damping"] - start["damping"]
         e0, e1 = start["energy"], end["energy"]
-        created = (e1 - e0) + contacts - walls - gravity
+        created = (e1 - e0) + contacts - walls - gravity - damping
         supplied = abs(e0) + abs(walls) + abs(gravity)
         self.energy_balance = dict(start=b["step"], end=self.step, energy_start=e0, energy_end=e1,
                                    kinetic_end=end["kinetic"], elastic_end=end["elastic"],
                                    dissipated_contacts=contacts, work_walls=walls, work_gravity=gravity,
-                                   created=created, supplied=supplied,
+                                   work_damping=damping, created=created, supplied=supplied,
                                    ratio=created / supplied if supplied > 0 else math.inf)
         limit = tol("energy.blow-up-3d").value
         if math.isfinite(created) and (created <= limit * supplied
-                                       or created <= ENERGY_ROUND_OFF * (abs(e1) + abs(contacts))):
+                                       or created <= ENERGY_ROUND_OFF * (abs(e1) + abs(contacts) + abs(damping))):
             return None
         return (f"the energy balance of steps {b['step']}-{self.step} does not close: the steps created {created:.6g} "
                 f"(Δ(kinetic + elastic) {e1 - e0:.6g} + dissipated by the contacts {contacts:.6g} - work of planes and "
-                f"fixed spheres {walls:.6g} - work of gravity {gravity:.6g}), more than {limit:g} × the {supplied:.6g} "
+                f"fixed spheres {walls:.6g} - work of gravity {gravity:.6g} - work of the damping {damping:.6g}), more "
+                f"than {limit:g} × the {supplied:.6g} "
                 f"the window started with or was given (tolerance 'energy.blow-up-3d', demflow/tolerances.py): the "
                 f"time step is unstable. Reduce dt (now {self.dt:.4g}, safe estimate {self.dt_safe:.4g}, "
                 "demflow.integrate.safe_time_step_3d; for Hertz contacts deeper than scene.max_overlap the "
@@ -579,16 +580,9 @@ class Simulation3D:
 
     def save_checkpoint(self, path: str | os.PathLike) -> Path:
         """Write the dynamic state to ``path`` (.npz) atomically (temp file + rename)."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         meta = dict(scene=self.scene.name, step=self.step, n=self.n, n_planes=self.n_planes, dt=self.dt, dim=3,
                     static=self._scene_digest)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
-        os.close(fd)
-        with open(tmp, "wb") as fh:
-            np.savez(fh, meta=json.dumps(meta), **self._state_arrays())
-        os.replace(tmp, path)
-        return path
+        return write_checkpoint(Path(path), meta, self._state_arrays())
 
     def load_checkpoint(self, path: str | os.PathLike) -> "Simulation3D":
         """Restore a state written by :meth:`save_checkpoint` for the same scene."""

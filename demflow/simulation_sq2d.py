@@ -40,7 +40,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest
+from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.neighbours import pairs_cell_search, transfer_history
 from .integrate import critical_time_step
 from .jit import njit
@@ -637,21 +637,11 @@ class SuperquadricSimulation:
 
     def save_checkpoint(self, path) -> "Path":
         """Write the dynamic state to ``path`` (.npz) atomically (temporary file + rename)."""
-        import json
-        import os
-        import tempfile
         from pathlib import Path
 
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         meta = dict(scene=self.scene.name, family="superquadrics", step=self.step, n=self.n, nw=self.nw, dt=self.dt,
                     static=self._scene_digest)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
-        os.close(fd)
-        with open(tmp, "wb") as fh:
-            np.savez(fh, meta=json.dumps(meta), **self._state_arrays())
-        os.replace(tmp, path)
-        return path
+        return write_checkpoint(Path(path), meta, self._state_arrays())
 
     def load_checkpoint(self, path) -> "SuperquadricSimulation":
         """Restore a state written by :meth:`save_checkpoint` (or saved on a blow-up) for the same scene."""

@@ -149,21 +149,19 @@ def integrate(sp, g, dmp, dt, recording, orient):
             if dmp.adaptive:
                 dmp.prev_dx[i, a] = d
             step2 += d * d
+            vm = 0.5 * (v0 + v1)
             if recording:
-                vm = 0.5 * (v0 + v1)
                 ekt += 0.5 * m * vm * vm
             if damped:
-                vm = 0.5 * (v0 + v1)
                 wdamp += (f - sp.FM[i, a] - m * g[a]) * vm * dt - C * vm * vm * dt
         for a in range(3):
             w0 = sp.angvel[i, a]
             t, w1 = damped_leapfrog(sp.FM[i, 3 + a], w0, I, a_r, b_r, local, dt)
             sp.angvel[i, a] = w1
+            wm = 0.5 * (w0 + w1)
             if recording:
-                wm = 0.5 * (w0 + w1)
                 ekr += 0.5 * I * wm * wm
             if damped:
-                wm = 0.5 * (w0 + w1)
                 wdamp += (t - sp.FM[i, 3 + a]) * wm * dt - Cr * wm * wm * dt
         if orient:  # q <- dq(ω Δt) ⊗ q (ω in the fixed frame); only when the scene asks for orientations
             wx = sp.angvel[i, 0]
@@ -233,12 +231,15 @@ def body_step(sp, bd, g, dmp, dt, recording):
     alpha = dmp.alpha + (dmp.alpha_now[0] if dmp.adaptive else 0.0)
     local = dmp.local
     damped = alpha != 0.0 or dmp.c_abs != 0.0 or dmp.c_rot_abs != 0.0 or local > 0.0  # its work: every step
+    F = np.empty(3)  # the body's force and moment sums, reused body after body (no allocation per body)
+    T = np.empty(3)
     for b in range(bd.pos.shape[0]):
         m = bd.mass[b]
         s0 = bd.start[b]
         s1 = bd.start[b + 1]
-        F = np.zeros(3)
-        T = np.zeros(3)
+        for a in range(3):
+            F[a] = 0.0
+            T[a] = 0.0
         for p in range(s0, s1):
             rx = sp.pos[p, 0] - bd.pos[b, 0]
             ry = sp.pos[p, 1] - bd.pos[b, 1]
@@ -262,11 +263,10 @@ def body_step(sp, bd, g, dmp, dt, recording):
             f, v1 = damped_leapfrog(F[a] + m * g[a], v0, m, a_t, b_t, local, dt)
             bd.vel[b, a] = v1
             bd.pos[b, a] += dt * v1
+            vm = 0.5 * (v0 + v1)
             if recording:
-                vm = 0.5 * (v0 + v1)
                 ekt += 0.5 * m * vm * vm
             if damped:
-                vm = 0.5 * (v0 + v1)
                 wdamp += (f - F[a] - m * g[a]) * vm * dt - C * vm * vm * dt
         I0 = bd.moments[b, 0]
         I1 = bd.moments[b, 1]
@@ -281,11 +281,10 @@ def body_step(sp, bd, g, dmp, dt, recording):
                 t, w1 = damped_leapfrog(T[a], w0, I0, a_r, b_r, local, dt)
                 bd.angvel[b, a] = w1
                 bd.L[b, a] = I0 * w1
+                wm = 0.5 * (w0 + w1)
                 if recording:
-                    wm = 0.5 * (w0 + w1)
                     ekr += 0.5 * I0 * wm * wm
                 if damped:
-                    wm = 0.5 * (w0 + w1)
                     wdamp += (t - T[a]) * wm * dt - Cr * wm * wm * dt
             wx = bd.angvel[b, 0]
             wy = bd.angvel[b, 1]

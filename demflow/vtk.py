@@ -22,6 +22,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from .atomic import write_text_atomic
 
 VTK_LINE = 3  # the VTK cell type of a two-point line
 
@@ -93,11 +94,7 @@ def _write_empty_grid(path, cell_arrays: list[str]) -> Path:
             '        <DataArray type="UInt8" Name="types" format="ascii">\n        </DataArray>\n'
             f'      </Cells>\n      <CellData>\n{arrays}      </CellData>\n    </Piece>\n  </UnstructuredGrid>\n'
             '</VTKFile>\n')
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
-    return path
+    return write_text_atomic(path, text)
 
 
 def write_pvd(path, entries) -> Path:
@@ -107,11 +104,7 @@ def write_pvd(path, entries) -> Path:
                      for t, part, f in entries)
     text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
             f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
-    return path
+    return write_text_atomic(path, text)
 
 
 def write_results_vtk(results, outdir, prefix: str = "run") -> list[Path]:

@@ -500,3 +500,16 @@ def test_a_sphere_on_a_shared_edge_of_a_flat_mesh_acts_as_on_the_plane(at):
     assert sim.tables()["records"].contacts.max() == 1
     np.testing.assert_allclose(sim.spheres.vel, ref.spheres.vel, rtol=0, atol=1e-10)
     np.testing.assert_allclose(sim.spheres.angvel, ref.spheres.angvel, rtol=0, atol=1e-6)
+
+
+def test_a_lone_sphere_builds_and_flies_and_no_law_at_all_is_a_clear_error():
+    """A scene where nothing can touch (one sphere, no wall) takes its law family from the laws declared between
+    its materials (it was refused with "mixes contact-law families ([])"); with no law declared at all the
+    error says what to declare."""
+    mats = {"m": df.Material(density=2650.0, young=7e9, poisson=0.2)}
+    one = df.Spheres(x=[0.0], y=[0.0], z=[0.0], radius=[0.01], material="m", velocity=[[1.0, 0.0, 0.0]])
+    sim = df.build(df.Scene3D(name="one", spheres=one, materials=mats, n_steps=10,
+                              laws={("m", "m"): df.HertzMindlinLaw(friction=0.3, restitution=0.5)})).run()
+    assert sim.spheres.pos[0, 0] == pytest.approx(10 * sim.dt, rel=1e-12)
+    with pytest.raises(df.SceneError, match=r"no particle can touch .* declare one, e\.g\. laws\[\('m', 'm'\)\]"):
+        df.build(df.Scene3D(name="one", spheres=one, materials=mats, laws={}, n_steps=10))

@@ -62,7 +62,7 @@ def band_seed(item) -> dict:
     import time
     from pathlib import Path
 
-    from ..results import _atomic_write
+    from ..atomic import write_bytes_atomic
 
     seed, q, root = item
     f = Path(root) / f"seed{int(seed)}-{_band_key(q)}.pkl"
@@ -73,7 +73,7 @@ def band_seed(item) -> dict:
     out = {"samples": res, "compute_s": time.perf_counter() - t, "seed": int(seed)}
     for r in res.values():  # what the analysis does not use is dropped (the checkpoint stays small)
         r.pop("snaps", None)
-    _atomic_write(f, lambda tmp: Path(tmp).write_bytes(pickle.dumps(out)))
+    write_bytes_atomic(f, pickle.dumps(out))
     return out
 
 

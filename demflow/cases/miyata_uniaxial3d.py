@@ -190,11 +190,9 @@ class ProtocolCheckpoints:
     def save(self, name: str, obj) -> None:
         import pickle
 
-        from ..results import _atomic_write
+        from ..atomic import write_bytes_atomic
 
-        from pathlib import Path
-
-        _atomic_write(self.dir / name, lambda t: Path(t).write_bytes(pickle.dumps(obj)))
+        write_bytes_atomic(self.dir / name, pickle.dumps(obj))
 
     def load(self, name: str):
         import pickle

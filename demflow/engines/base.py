@@ -12,18 +12,17 @@ pasted into a deck's code.
 from __future__ import annotations
 
 import hashlib
-import json
 import math
 import os
 import shutil
 import subprocess
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 
 from ..scene import Scene, SceneError, check_identifier
+from ..atomic import write_json_atomic
 
 
 class EngineError(RuntimeError):
@@ -187,9 +186,5 @@ class Engine:
 
 
 def atomic_json(path: Path, obj) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    os.chmod(tmp, 0o644)
-    with os.fdopen(fd, "w") as fh:
-        json.dump(obj, fh, indent=1)
-    os.replace(tmp, path)
+    """An engine file's JSON (decks' scene numbers, engine outputs; indent 1), written atomically."""
+    write_json_atomic(path, obj, indent=1)

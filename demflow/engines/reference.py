@@ -20,6 +20,7 @@ from pathlib import Path
 
 from ..results import Results
 from .base import EngineError, atomic_json, sha256
+from ..atomic import write_text_atomic
 
 README = """# Reference run: {case} / {variant} / {engine}
 
@@ -98,11 +99,7 @@ def _generate(case, variant, engine, scene, params, dest: Path, timeout: float) 
 
 def _write_seal(path: Path) -> None:
     """meta.sha256: the sha256 of meta.json, in sha256sum's format, written atomically."""
-    fd, tmp = tempfile.mkstemp(dir=path, suffix=".tmp")
-    os.chmod(tmp, 0o644)
-    with os.fdopen(fd, "w") as fh:
-        fh.write(f"{sha256(path / 'meta.json')}  meta.json\n")
-    os.replace(tmp, path / SEAL)
+    write_text_atomic(path / SEAL, f"{sha256(path / 'meta.json')}  meta.json\n")
 
 
 def _verify_files(path: Path) -> dict:

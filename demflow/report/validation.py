@@ -11,9 +11,7 @@ import hashlib
 import html
 import json
 import math
-import os
 import platform
-import tempfile
 import time
 from pathlib import Path
 
@@ -25,6 +23,7 @@ from .. import progress
 from ..manifest import describe
 from ..cases import CASES  # noqa: E402
 from ..cases.base import INFO, MISS, counted, kind_counts, kind_of, validation_passes  # noqa: E402
+from ..atomic import write_text_atomic
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".gif")  # a case's other outputs (e.g. .vtu) are linked, not shown
 
@@ -116,14 +115,6 @@ def _strict(obj):
     if isinstance(obj, (list, tuple)):
         return [_strict(v) for v in obj]
     return obj
-
-
-def _atomic_text(path: Path, text: str):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
 
 
 def run_validation(names=None, outdir="reports/validation", overrides=None, cases=None, include_slow=False):
@@ -292,20 +283,20 @@ def write_report(summary, outdir="reports/validation"):
                 f"<th></th><th>kind</th><th>source</th><th>why this tolerance</th></tr>{checks}</table>{extra}"
                 f"<h2>Figures</h2>{figs}"
                 f"</body></html>")
-        _atomic_text(outdir / name / "index.html", page)
+        write_text_atomic(outdir / name / "index.html", page)
     from .robustness import PAGE, render, results_dir, summary_line
 
     robustness = render(results_dir())  # the fuzz scripts' last run (issue 19), if there is one
     if robustness:
-        _atomic_text(outdir / PAGE, robustness)
+        write_text_atomic(outdir / PAGE, robustness)
     from . import source_figures
 
     summary["source_figures"] = dict(counts=source_figures.counts(summary), rows=source_figures.rows(summary))
-    _atomic_text(outdir / "sources.html",
+    write_text_atomic(outdir / "sources.html",
                  f"<!doctype html><html><head><meta charset='utf-8'><title>demflow: source figures</title>"
                  f"<style>{CSS}</style></head><body><p><a href='index.html'>← all cases</a></p>"
                  f"<h1>The sources' figures: reproduced or not</h1>{source_figures.render(summary)}</body></html>")
-    _atomic_text(outdir / "source_figures.md", source_figures.markdown(summary) + "\n")
+    write_text_atomic(outdir / "source_figures.md", source_figures.markdown(summary) + "\n")
     sf = " · ".join(f"{k} {v}" for k, v in sorted(summary["source_figures"]["counts"].items()))
     all_ok = all(c["passed"] for c in summary["cases"].values())
     every = [ch for c in summary["cases"].values() for ch in c["checks"]]
@@ -330,5 +321,5 @@ def write_report(summary, outdir="reports/validation"):
              f"<th>wall time [s]</th>"
              f"<th>run at</th></tr>{''.join(rows)}</table>{_not_run(summary)}"
              f"{summary_line(results_dir()) if robustness else ''}</body></html>")
-    _atomic_text(outdir / "index.html", index)
-    _atomic_text(outdir / "summary.json", json.dumps(_strict(summary), indent=2, default=str, allow_nan=False))
+    write_text_atomic(outdir / "index.html", index)
+    write_text_atomic(outdir / "summary.json", json.dumps(_strict(summary), indent=2, default=str, allow_nan=False))
