@@ -22,6 +22,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+
 from .atomic import write_text_atomic
 
 VTK_LINE = 3  # the VTK cell type of a two-point line

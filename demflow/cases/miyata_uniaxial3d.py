@@ -176,12 +176,17 @@ class ProtocolCheckpoints:
         self.dir = Path(root) / f"seed{int(p['seed'])}-{key}"
         self._t0 = time.perf_counter()
         self._base_s = float(self.load("compute_s") or 0.0)  # compute time of earlier sessions of this run
+        self._computing = False  # whether this session advanced the run (a finished run reloaded did not)
 
     def compute_s(self) -> float:
-        """Seconds this run has computed, over every session up to its last checkpoint and this one's now."""
-        return self._base_s + time.perf_counter() - self._t0
+        """Seconds this run has computed, over every session up to its last checkpoint and this one's now.  A
+        session that only reloads a finished run adds nothing: the time a report spends re-rendering a page is
+        not the run's cost."""
+        return self._base_s + (time.perf_counter() - self._t0 if self._computing else 0.0)
 
     def mark_time(self) -> None:
+        """Store the compute time at a checkpoint (called once this session has advanced the run)."""
+        self._computing = True
         self.save("compute_s", self.compute_s())
 
     def path(self, name: str):

@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
-from ..scene import Scene, SceneError, check_identifier
 from ..atomic import write_json_atomic
+from ..scene import Scene, SceneError, check_identifier
 
 
 class EngineError(RuntimeError):

@@ -18,9 +18,9 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from ..atomic import write_text_atomic
 from ..results import Results
 from .base import EngineError, atomic_json, sha256
-from ..atomic import write_text_atomic
 
 README = """# Reference run: {case} / {variant} / {engine}
 

@@ -293,9 +293,9 @@ def write_report(summary, outdir="reports/validation"):
 
     summary["source_figures"] = dict(counts=source_figures.counts(summary), rows=source_figures.rows(summary))
     write_text_atomic(outdir / "sources.html",
-                 f"<!doctype html><html><head><meta charset='utf-8'><title>demflow: source figures</title>"
-                 f"<style>{CSS}</style></head><body><p><a href='index.html'>← all cases</a></p>"
-                 f"<h1>The sources' figures: reproduced or not</h1>{source_figures.render(summary)}</body></html>")
+                      f"<!doctype html><html><head><meta charset='utf-8'><title>demflow: source figures</title>"
+                      f"<style>{CSS}</style></head><body><p><a href='index.html'>← all cases</a></p>"
+                      f"<h1>The sources' figures: reproduced or not</h1>{source_figures.render(summary)}</body></html>")
     write_text_atomic(outdir / "source_figures.md", source_figures.markdown(summary) + "\n")
     sf = " · ".join(f"{k} {v}" for k, v in sorted(summary["source_figures"]["counts"].items()))
     all_ok = all(c["passed"] for c in summary["cases"].values())
