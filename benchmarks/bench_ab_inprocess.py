@@ -169,10 +169,10 @@ def main(argv=None):
     data = dict(info=info, rows=rows)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
+    from demflow.atomic import write_text_atomic
+
     for path, text in ((out / f"{a.tag}.json", json.dumps(data, indent=2)), (out / f"{a.tag}.md", markdown(data))):
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
+        write_text_atomic(path, text)
     print(markdown(data))
 
 

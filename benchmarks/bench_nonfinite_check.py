@@ -33,6 +33,7 @@ import numba  # noqa: E402
 
 import bench_dem as b  # noqa: E402
 import demflow.simulation as simulation  # noqa: E402
+from demflow.atomic import write_text_atomic  # noqa: E402
 from demflow.stepping import state_is_finite  # noqa: E402
 
 
@@ -68,12 +69,6 @@ def measure(n, steps, rounds):
                                                      sim.walls.force, sim.pairs.hist))) + 9 * sim.nw)
 
 
-def _atomic_write(path: Path, text: str):
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
-
-
 def _timed(fn):
     t0 = time.perf_counter()
     fn()
@@ -91,7 +86,7 @@ def main(argv=None):
     out = Path(args.out)
     meta = dict(generated=time.strftime("%Y-%m-%d %H:%M:%S"), python=platform.python_version(),
                 machine=platform.machine(), threads=1)
-    _atomic_write(out / "nonfinite_check.json", json.dumps(dict(meta, rows=rows), indent=1))
+    write_text_atomic(out / "nonfinite_check.json", json.dumps(dict(meta, rows=rows), indent=1))
     md = [f"# Non-finite state check: cost on the bench_dem packing ({meta['generated']}, one thread)", "",
           "| N | values checked | one check [µs] | checks per step | step [ms] | share of the run time |",
           "|---|---|---|---|---|---|"]
@@ -102,7 +97,7 @@ def main(argv=None):
            f"pass run_steps makes). Checks per step: calls of run_steps per step over {args.steps} steps "
            f"(one per neighbour-list rebuild or chunk). Step: best of {args.rounds} runs of {args.steps} steps, "
            "CPU time. Share = one check × checks per step ÷ step time."]
-    _atomic_write(out / "nonfinite_check.md", "\n".join(md) + "\n")
+    write_text_atomic(out / "nonfinite_check.md", "\n".join(md) + "\n")
     print("\n".join(md))
 
 
