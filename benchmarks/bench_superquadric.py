@@ -14,8 +14,8 @@
    the overlap's and normal's error against tolerance 1e-14, and the potential evaluations and time per
    pair; plus the cycle time per step of the n = 4 packing at each tolerance.
 
-Best of 3 rounds, with the spread (max/min - 1) of the rounds.  The machine is shared (2 cores, other
-engineers' jobs): the load average at the start and end is stored with the results.
+Best of 3 rounds, with the spread (max/min - 1) of the rounds.  Run it on a quiet machine: the load average at
+the start and end is stored with the results.
 
 Run:  PYTHONPATH=$PWD python benchmarks/bench_superquadric.py   (writes benchmarks/results/superquadric_cost.{json,md})
 """
@@ -224,8 +224,9 @@ def main():
     numba.set_num_threads(1)
     res = dict(machine=platform.processor() or platform.machine(), cpus=os.cpu_count(), rounds=ROUNDS,
                steps=STEPS, threads=1, load_average_start=load0,
-               note="Shared 2-core machine; other engineers' jobs were running (see the load averages): absolute "
-                    "times are inflated and noisy, the ratios between rows less so.")
+               date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+               note="The load averages show what else ran (about 1 on this 2-core machine: this benchmark "
+                    "alone; above 2, other jobs, and the absolute times are inflated, the ratios between rows less so).")
     cyc = {}
     for name, scene in packings().items():
         t, spread, n, cont = cycle_cost(scene)
@@ -260,7 +261,7 @@ def main():
 def render(res) -> str:
     L = ["# Cost of a 2D superquadric contact (issue 15 item 1)", "",
          f"`benchmarks/bench_superquadric.py`; best of {res['rounds']} rounds (spread = max/min − 1 of the rounds), "
-         f"1 thread, {res['steps']} steps. {res['note']} Load average at start "
+         f"1 thread, {res['steps']} steps, run {res.get('date', '(date not recorded)')}. {res['note']} Load average at start "
          f"{', '.join(f'{x:.2f}' for x in res['load_average_start'])}, at end "
          f"{', '.join(f'{x:.2f}' for x in res['load_average_end'])}.", "",
          "## Cycle cost (dense packings, friction, floor)", "",

@@ -12,17 +12,29 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import threading
 from pathlib import Path
 from typing import Callable
 
 
+_UMASK_LOCK = threading.Lock()
+
+
 def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
+    """The process's umask now (it may change after import: each write reads it).  Linux states it in
+    /proc/self/status, read without touching it; elsewhere it is set and restored under a lock (the only
+    portable way to read it; another thread creating a file in between would see 0o022)."""
+    try:
+        with open("/proc/self/status", encoding="ascii", errors="replace") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    with _UMASK_LOCK:
+        mask = os.umask(0o022)
+        os.umask(mask)
     return mask
-
-
-_FILE_MODE = 0o666 & ~_umask()
 
 
 def write_atomic(path, write: Callable[[str], object]) -> Path:
@@ -34,7 +46,7 @@ def write_atomic(path, write: Callable[[str], object]) -> Path:
     os.close(fd)
     try:
         write(tmp)
-        os.chmod(tmp, _FILE_MODE)
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

@@ -292,6 +292,19 @@ SPHERES_ESTIMATE = ("spheres (demflow.integrate.safe_time_step_3d: every sphere 
                     "up to scene.max_overlap={max_overlap:g} of the smaller radius)")
 
 
+def _chosen_step(scene, dt_crit: float, how: str) -> float:
+    """The time step: ``scene.dt_fraction`` × the critical estimate ``dt_crit`` (``how`` names it), or
+    ``scene.dt``, refused above the estimate unless ``scene.allow_supercritical``."""
+    if scene.dt is None:
+        return scene.dt_fraction * dt_crit
+    dt = float(scene.dt)
+    if dt > dt_crit and not scene.allow_supercritical:
+        raise SceneError(f"scene.dt={dt:.6g} exceeds the critical estimate {dt_crit:.6g} ({how}); give a "
+                         "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
+                         "allow_supercritical=True")
+    return dt
+
+
 def _check_safe_step(scene, dt: float, dt_safe: float, estimate: str = SPHERES_ESTIMATE) -> None:
     """Refuse a step above the safe estimate (warn with allow_unsafe_dt; allow_supercritical accepts it).
     ``estimate`` says what the estimate assumes ("{max_overlap}" is filled in)."""
@@ -467,14 +480,7 @@ def build3d(scene: Scene3D) -> Simulation3D:
         kmax = max(max(law.kn, law.ks) for law in family.laws_by_pair.values())
         dt_crit = 2.0 * math.sqrt(float(mass.min()) / kmax)
         how = "2√(m_min/k_max)"
-    if scene.dt is None:
-        dt = scene.dt_fraction * dt_crit
-    else:
-        dt = float(scene.dt)
-        if dt > dt_crit and not scene.allow_supercritical:
-            raise SceneError(f"scene.dt={dt:.6g} exceeds the critical estimate {dt_crit:.6g} ({how}); give a "
-                             "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
-                             "allow_supercritical=True")
+    dt = _chosen_step(scene, dt_crit, how)
     dt_safe = _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies)
     _check_safe_step(scene, dt, dt_safe)
     d = scene.damping

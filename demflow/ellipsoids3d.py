@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from . import libm
-from .build3d import (_array, _check_safe_step, _common_length, _law_family, _skin_and_box, _walls,
+from .build3d import (_array, _check_safe_step, _chosen_step, _common_length, _law_family, _skin_and_box, _walls,
                       particle_materials, quat_to_matrix, rayleigh_time_step, refuse_rotational_dashpot,
                       time_step_laws)
 from .contacts.ellipsoids import WARM_COLUMNS
@@ -146,14 +146,7 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
         kmax = max(max(law.kn, law.ks) for law in family.laws_by_pair.values())
         dt_crit = 2.0 * math.sqrt(float(mass.min()) / kmax)
         how = "2√(m_min/k_max)"
-    if scene.dt is None:
-        dt = scene.dt_fraction * dt_crit
-    else:
-        dt = float(scene.dt)
-        if dt > dt_crit and not scene.allow_supercritical:
-            raise SceneError(f"scene.dt={dt:.6g} exceeds the critical estimate {dt_crit:.6g} ({how}); give a "
-                             "smaller dt, leave dt=None for dt_fraction × the estimate, or set "
-                             "allow_supercritical=True")
+    dt = _chosen_step(scene, dt_crit, how)
     dt_safe = _safe_step_ellipsoids(scene, family, axes, mass, moments, mats, mat, index, walls)
     _check_safe_step(scene, dt, dt_safe, ELLIPSOIDS_ESTIMATE)
     P = np.zeros((n, 16))

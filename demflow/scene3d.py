@@ -14,7 +14,6 @@ steps (ch3 eqs 3.19-3.20).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Sequence
 

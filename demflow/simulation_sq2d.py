@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 from collections import namedtuple
+from pathlib import Path
 
 import numpy as np
 
@@ -628,16 +629,14 @@ class SuperquadricSimulation:
     def _save_last_good(self) -> str:
         import os
         import tempfile
-        from pathlib import Path
 
         out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
         path = out / f"{self.scene.name}-last-good-step{self.step}.npz"
         self.save_checkpoint(path)
         return str(path)
 
-    def save_checkpoint(self, path) -> "Path":
+    def save_checkpoint(self, path) -> Path:
         """Write the dynamic state to ``path`` (.npz) atomically (temporary file + rename)."""
-        from pathlib import Path
 
         meta = dict(scene=self.scene.name, family="superquadrics", step=self.step, n=self.n, nw=self.nw, dt=self.dt,
                     static=self._scene_digest)

@@ -76,3 +76,17 @@ def test_a_simulations_checkpoint_and_the_validation_report_are_readable_by_othe
     run_validation(["ch3-impulse-chain"], outdir=tmp_path / "report")
     for name in ("index.html", "summary.json"):
         assert _mode(tmp_path / "report" / name) == 0o644, name
+
+
+def test_the_umask_is_read_at_each_write_not_at_import(tmp_path):
+    """A process that sets its umask after importing demflow (a server, a shared-group run) gets files with
+    that umask; before, the mask of import time was used for every write."""
+    old = os.umask(0o077)
+    try:
+        private = write_text_atomic(tmp_path / "private.txt", "x")
+        os.umask(0o002)
+        group = write_text_atomic(tmp_path / "group.txt", "x")
+    finally:
+        os.umask(old)
+    assert _mode(private) == 0o600
+    assert _mode(group) == 0o664

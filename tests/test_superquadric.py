@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import HealthCheck, Phase, example, given, settings
 from hypothesis import strategies as st
 
 from demflow import ContactModel, Discs, LinearLaw, Material, Outputs, Scene, SceneError, Wall, build
@@ -191,8 +191,33 @@ def _contact(si, sj, thi, thj, c, warm):
     return sq.pair_contact(c[0], c[1], thi, thj, ai, bi, ni, rbi, aj, bj, nj, rbj, a0i, a0j, warm, 1e-9, math.pi / 8)
 
 
+BRENT_TOL = 1e-9  # the α tolerance _contact passes to pair_contact [rad]
+SQRT_EPS = math.sqrt(np.finfo(float).eps)
+
+
+def _lowest_within_tol(alpha, s_own, th_own, c_own, s_other, th_other, c_other):
+    """The other body's potential f at the lowest point of this body's surface within Brent's final bracket
+    around the solver's α (±2(√eps·|α| + tol); the axes' parameters kπ/2 in it included): the solver's accuracy is
+    stated in its parameter (tolerance "superquadric.potential-minimum")."""
+    a, b, n = s_own
+    window = 2.0 * (SQRT_EPS * abs(alpha) + BRENT_TOL)  # Brent's stopping rule (demflow.shapes.superquadric._brent)
+    alphas = list(alpha + np.linspace(-window, window, 41))
+    alphas += [k * math.pi / 2 for k in range(-2, 3) if abs(k * math.pi / 2 - alpha) <= window]
+    xy = np.array([sq.surface_point(al, a, b, n) for al in alphas])
+    c, s = math.cos(th_own), math.sin(th_own)
+    P = np.column_stack([c_own[0] + c * xy[:, 0] - s * xy[:, 1], c_own[1] + s * xy[:, 0] + c * xy[:, 1]])
+    return f_body(P, *s_other, th_other, c_other[0], c_other[1]).min()
+
+
 @HYP
 @given(si=shapes, sj=shapes, thi=angles, thj=angles, phi=angles, depth=st.floats(1e-3, 2e-2), warm=st.booleans())
+@example(si=(0.5, 0.89, 5.83420038820389), sj=(0.5258930348068995, 0.6611041058328879, 8.016565404104233),
+         thi=-2.8478622429572713e-303, thj=-0.003437571656748517, phi=2.828197201160286e-229, depth=0.005,
+         warm=False)  # flat faces nearly parallel, the minimum on i's axis (found by Hypothesis, 2026-11-27)
+@example(si=(1.2043009597770644, 1.2043009597770644, 6.689740462532625),
+         sj=(1.2043009597770644, 1.2043009597770644, 6.689740462532625), thi=1.8839494163223893,
+         thj=1.2043009597770644, phi=1.2043009597770644, depth=0.014281200961436851,
+         warm=True)  # the minimum 0.0013 from j's axis (found by Hypothesis, 2026-11-27)
 def test_pair_contact_vs_fine_polygons(si, sj, thi, thj, phi, depth, warm):
     """Overlap, normal, the two minimisers of the geometric potential and the contact point vs
     4000-vertex polygons (2 <= n <= 10); the reference overlap is the polygons' separating-axis
@@ -207,18 +232,33 @@ def test_pair_contact_vs_fine_polygons(si, sj, thi, thj, phi, depth, warm):
     # the minimisers: P_i minimises f_j over ∂i, P_j minimises f_i over ∂j.  The brute force over the
     # polygon's vertices (which lie on the surface) bounds the minimum from above; on flat faces the
     # minimiser's location is ill-conditioned, so the potential's value is compared, not the point.
-    xi, yi = sq.surface_point(o[9], ai, bi, ni)
-    xj, yj = sq.surface_point(o[10], aj, bj, nj)
-    Pi_sq = np.array([[math.cos(thi) * xi - math.sin(thi) * yi, math.sin(thi) * xi + math.cos(thi) * yi]])
-    Pj_sq = c + np.array([[math.cos(thj) * xj - math.sin(thj) * yj, math.sin(thj) * xj + math.cos(thj) * yj]])
     slack = tol("superquadric.potential-minimum").value
-    assert f_body(Pi_sq, aj, bj, nj, thj, c[0], c[1])[0] <= f_body(Pi, aj, bj, nj, thj, c[0], c[1]).min() + slack
-    assert f_body(Pj_sq, ai, bi, ni, thi, 0.0, 0.0)[0] <= f_body(Pj, ai, bi, ni, thi, 0.0, 0.0).min() + slack
+    assert _lowest_within_tol(o[9], si, thi, (0.0, 0.0), sj, thj, c) <= f_body(Pi, aj, bj, nj, thj, c[0], c[1]).min() + slack
+    assert _lowest_within_tol(o[10], sj, thj, c, si, thi, (0.0, 0.0)) <= f_body(Pj, ai, bi, ni, thi, 0.0, 0.0).min() + slack
     # the contact point (middle of the overlap on the line of centres) lies within the overlap of the two
     # outlines: within δ of each (plus one edge of the polygons)
     cp = np.array([o[3] + (o[5] - 0.5 * delta) * ex, o[4] + (o[5] - 0.5 * delta) * ey])
     for P in (Pi, Pj):
         assert np.linalg.norm(P - cp, axis=1).min() <= delta + longest_edge(P)
+
+
+def test_the_potential_minimum_check_fails_the_minimiser_of_eq_35s_parameter():
+    """Negative control of the check above, on its second explicit example: for n > 2 the solver searched Miyata's
+    eq 35 parameter until 2026-11-27, whose accuracy near an axis (√eps·π in α) is 0.006 b in the point at
+    n = 6.7; the point it returned (α = 3.141592613940165 of eq 35, recorded) must fail the check, f 1.2e-5 high,
+    and the solver's point (polar angle) pass it."""
+    si = sj = (1.2043009597770644, 1.2043009597770644, 6.689740462532625)
+    thi, thj, phi, depth = 1.8839494163223893, 1.2043009597770644, 1.2043009597770644, 0.014281200961436851
+    Pi, Pj, c, dref, uref = _placed_pair(si, sj, thi, thj, phi, depth)
+    brute = f_body(Pj, *si, thi, 0.0, 0.0).min()
+    slack = tol("superquadric.potential-minimum").value
+    a, b, n = sj
+    old = 3.141592613940165  # eq 35: x = a sgn(cos α)|cos α|^(2/n), y = b sgn(sin α)|sin α|^(2/n)
+    x = a * math.copysign(abs(math.cos(old)) ** (2.0 / n), math.cos(old))
+    y = b * math.copysign(abs(math.sin(old)) ** (2.0 / n), math.sin(old))
+    now = _contact(si, sj, thi, thj, c, True)[10]
+    assert _lowest_within_tol(now, sj, thj, c, si, thi, (0.0, 0.0)) <= brute + slack
+    assert _lowest_within_tol(math.atan2(y, x), sj, thj, c, si, thi, (0.0, 0.0)) > brute + 1000 * slack
 
 
 @HYP

@@ -120,7 +120,6 @@ class LiggghtsEngine(Engine):
             D = S["discs"]
             for k, key in enumerate(("vx", "vy", "omega")):
                 D[key] = [v + h if h != 0.0 else v for v, h in zip(D[key], half[:, k].tolist())]
-        mats = S["materials"]
         disc_mats = sorted(set(S["discs"]["material"]))
         wall_mats = sorted({w["material"] for w in S["walls"]})
         types = disc_mats + [m for m in wall_mats if m not in disc_mats]

@@ -6,9 +6,18 @@ the origin, x along the body's local axis),
     f(x, y) = |x/a|^n + |y/b|^n - 1                                      (Miyata eq 34)
 
 outside where f > 0, inside where f < 0.  demflow takes 1 < n <= 10, Miyata's range (smooth, convex;
-n = 2, a = b is a disc of radius a).  Its surface is parametrised by the angle α (eq 35):
+n = 2, a = b is a disc of radius a).  For n <= 2 its surface is parametrised by the angle α of eq 35:
 
-    x(α) = a sign(cos α)|cos α|^(2/n),   y(α) = b sign(sin α)|sin α|^(2/n).
+    x(α) = a sign(cos α)|cos α|^(2/n),   y(α) = b sign(sin α)|sin α|^(2/n);
+
+for n > 2 by the polar angle α of the point, r(α)(cos α, sin α) with r = (|cos α/a|^n + |sin α/b|^n)^(-1/n).
+Eq 35 is singular at the axes for n > 2 (dx/dα is unbounded where the surface is flattest): Brent's
+accuracy in the parameter, √eps·|α| + tol, was an accuracy of b(√eps·π)^(2/n) in the point there, 0.7 % of b
+at n = 6.7 and 3 % at n = 10 (found by tests/test_superquadric.py's comparison with fine polygons on
+2026-11-27: a minimiser 0.006 b from the true one on a flat face).  The polar angle moves the point by at
+most r·|Δα|/cos(angle between the radius and the normal), bounded on a convex outline.  Circles and sharp
+shapes (n <= 2) keep eq 35, which is smooth there.  The contact is defined by the surface, not by the
+parameter: only the accuracy of the minimiser changes.
 
 Contact between two bodies i and j (Miyata §2.3 (2), the geometric potential): P_i is the point of
 ∂i that minimises f_j (the point of i deepest in j; eqs 36-37 express it in j's frame), P_j the
@@ -63,7 +72,7 @@ N_MAX = 10.0  # inclusive: Miyata §2.3 "1 < n <= 10"
 RHO_MIN_RATIO = 1e-6
 RHO_MAX_RATIO = 1e3
 N_SCAN = 32  # samples of the global scan (a new pair, or a minimum at the warm-start bracket's edge)
-DEFAULT_TOL = 1e-9  # Brent tolerance on the surface parameter α [rad]
+DEFAULT_TOL = 1e-9  # Brent tolerance on the surface parameter α [rad] (eq 35 for n <= 2, the polar angle for n > 2)
 DEFAULT_WINDOW = math.pi / 8  # warm-start bracket half-width [rad]
 _GOLD = 0.3819660112501051  # (3 - √5)/2
 _SQRT_EPS = 1.4901161193847656e-08  # √(float64 eps)
@@ -114,11 +123,21 @@ def bounding_radius(a, b, n):
 # ----------------------------------------------------------------------------- surface functions
 @njit
 def surface_point(alpha, a, b, n):
-    """Body-frame point of parameter α on the surface (Miyata eq 35) [length]."""
+    """Body-frame point of surface parameter α [length] (module docstring): for n <= 2 Miyata's eq 35,
+    for n > 2 the point at polar angle α, r(α)(cos α, sin α) with r = (|cos α/a|^n + |sin α/b|^n)^(-1/n)
+    (evaluated as 1/(u(1 + (v/u)^n)^(1/n)) with u the larger of |cos α|/a and |sin α|/b: no power overflows)."""
     c = math.cos(alpha)
     s = math.sin(alpha)
-    e = 2.0 / n
-    return a * math.copysign(abs(c) ** e, c), b * math.copysign(abs(s) ** e, s)
+    if n <= 2.0:
+        e = 2.0 / n
+        return a * math.copysign(abs(c) ** e, c), b * math.copysign(abs(s) ** e, s)
+    u = abs(c) / a
+    v = abs(s) / b
+    if u >= v:
+        r = 1.0 / (u * (1.0 + (v / u) ** n) ** (1.0 / n))
+    else:
+        r = 1.0 / (v * (1.0 + (u / v) ** n) ** (1.0 / n))
+    return r * c, r * s
 
 
 @njit
