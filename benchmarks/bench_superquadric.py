@@ -32,6 +32,7 @@ import numba
 import numpy as np
 
 from demflow import ContactModel, Discs, LinearLaw, Material, Scene, Wall, build
+from demflow.atomic import write_text_atomic
 from demflow.jit import njit
 from demflow.scene import Superquadrics
 from demflow.shapes import superquadric as sq
@@ -222,7 +223,7 @@ def tolerance_curve(tols=(1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12), windows=(
 def rerender():
     """Write superquadric_cost.md again from the stored superquadric_cost.json (no measurement)."""
     res = json.loads((OUT / "superquadric_cost.json").read_text())
-    (OUT / "superquadric_cost.md").write_text(render(res))
+    write_text_atomic(OUT / "superquadric_cost.md", render(res))
 
 
 def main():
@@ -260,8 +261,8 @@ def main():
     res["tolerance_cycle"] = tc
     res["load_average_end"] = os.getloadavg()
     OUT.mkdir(exist_ok=True)
-    (OUT / "superquadric_cost.json").write_text(json.dumps(res, indent=1))
-    (OUT / "superquadric_cost.md").write_text(render(res))
+    write_text_atomic(OUT / "superquadric_cost.json", json.dumps(res, indent=1))
+    write_text_atomic(OUT / "superquadric_cost.md", render(res))
 
 
 def render(res) -> str:
@@ -300,7 +301,7 @@ def render(res) -> str:
         L.append(f"| {r['tol']:.0e} | {r['s_per_step']:.3g} | {r['us_per_contact_step']:.3g} | "
                  f"{100 * r['spread']:.0f} % |")
     wide = [r for r in res["tolerance_curve"] if abs(r["window"] - math.pi / 8) < 1e-12]
-    loose = min(wide, key=lambda r: -r["tol"])
+    loose = max(wide, key=lambda r: r["tol"])
     tight = min(wide, key=lambda r: r["tol"])
     L += ["", "## Reading", "",
           "- A superquadric contact costs tens of disc contacts: each warm pair is two Brent minimisations of about "
