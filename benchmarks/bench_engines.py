@@ -16,9 +16,11 @@ Each engine runs that scene for S and for 2S steps (demflow with 1 and with 2 th
 YADE ``-j1``, LIGGGHTS one process, no MPI), recording nothing (``Outputs(every=0)``), so
 start-up, deck reading and setup cancel:
     rate = N x S / (t(2S) - t(S))      [particle-steps per second]
-(demflow: wall time of steps S..2S of one simulation, in process, JIT warm).  The engines'
-times are the wall times of their subprocesses, also their CPU times (getrusage of the
-children; less sensitive to other load on a shared machine).  ``--rounds`` rounds are run,
+(demflow: wall time of steps S..2S of one simulation, in process, JIT warm; LIGGGHTS: the same
+interval in its process, its deck's ``run 2S`` run as ``run S`` and ``run S pre no`` and the second
+run's "Loop time" taken: no start-up, deck reading or setup in it, and no drift of the host between
+two processes, which made t(2S) - t(S) scatter by up to 44 %).  YADE's times are the wall times
+of its subprocesses, also their CPU times (getrusage of the children).  ``--rounds`` rounds are run,
 the engine order rotating each round; the best round is reported, all are kept.
 
 Physical equivalence: a separate, untimed run of S steps per engine records the snapshots
@@ -36,6 +38,7 @@ import dataclasses
 import json
 import os
 import platform
+import re
 import resource
 import shutil
 import subprocess
@@ -53,6 +56,7 @@ import numba  # noqa: E402
 
 from bench_dem import contacts_per_disc, make_scene  # noqa: E402
 from demflow import ContactModel, Discs, GlobalDamping, Outputs, build  # noqa: E402
+from demflow.atomic import write_text_atomic  # noqa: E402
 from demflow.engines import LiggghtsEngine, YadeEngine  # noqa: E402
 from demflow.jit import set_threads  # noqa: E402
 
@@ -112,20 +116,54 @@ def _liggghts_neighbor_builds(d):
     return None
 
 
-class ExternalRunner:
-    """Decks for S and 2S steps written once; each call times one subprocess run."""
+LOOP_TIME = re.compile(r"^Loop time of ([0-9.eE+-]+) on (\d+) procs for (\d+) steps")
 
-    def __init__(self, engine, scene, S, root, timeout, E=None):
+
+def liggghts_loop_times(text):
+    """[(seconds, steps), ...]: the "Loop time" line LIGGGHTS prints after each ``run`` (the wall time of that
+    run's time-step loop, its setup excluded), in order."""
+    out = []
+    for line in text.splitlines():
+        m = LOOP_TIME.match(line)
+        if m:
+            out.append((float(m.group(1)), int(m.group(3))))
+    return out
+
+
+def split_run(deck, S):
+    """Rewrite the deck's one ``run 2S`` as ``run S`` and ``run S pre no``, so that LIGGGHTS times steps S..2S in its
+    own process (the second run's loop time): demflow's quantity, without two processes' start-up, reading and
+    setup.  ``pre no`` skips the second run's setup, so the run continues as the single ``run 2S`` does; with the
+    setup (forces recomputed, neighbours rebuilt, atoms re-sorted) the kinetic energy of the 3D benchmark packing
+    differed from the single run's by 4e-3 one step after the split and 2.4e-4 forty steps after
+    (tests/test_bench_timing.py)."""
+    lines = Path(deck).read_text().splitlines()
+    at = [k for k, line in enumerate(lines) if line.strip() == f"run {2 * S}"]
+    if len(at) != 1:
+        raise RuntimeError(f"{deck}: expected one 'run {2 * S}' line, found {len(at)}")
+    lines[at[0]:at[0] + 1] = [f"run {S}", f"run {S} pre no"]
+    Path(deck).write_text("\n".join(lines) + "\n")
+
+
+class ExternalRunner:
+    """Decks written once; each call times one subprocess run.  YADE: decks of S and 2S steps (rate from
+    t(2S) - t(S)).  LIGGGHTS (``in_process``, the default): one deck of 2S steps run as ``run S`` and ``run S pre no``,
+    the rate from the second run's loop time (:func:`split_run`); ``in_process=False``: S and 2S decks as YADE's."""
+
+    def __init__(self, engine, scene, S, root, timeout, E=None, in_process=True):
         """``E``: the engine object writing the decks (default the 2D LIGGGHTS or YADE engine)."""
-        self.engine, self.timeout = engine, timeout
+        self.engine, self.timeout, self.S = engine, timeout, S
+        self.in_process = in_process and engine == "liggghts"
         self.E = E or (LiggghtsEngine() if engine == "liggghts" else YadeEngine())
         self.E.path()
         self.dirs = {}
-        for k in (1, 2):
+        for k in ((2,) if self.in_process else (1, 2)):
             sc = dataclasses.replace(scene, n_steps=k * S)
             d = Path(root) / f"{engine}_{k}S"
             d.mkdir(parents=True, exist_ok=True)
             self.E.write_deck(sc, build(sc), d)
+            if self.in_process:
+                split_run(d / "deck.in", S)
             self.dirs[k] = d
 
     def run(self, k):
@@ -138,7 +176,26 @@ class ExternalRunner:
         extra = {}
         if self.engine == "liggghts":
             extra["neighbor_builds"] = _liggghts_neighbor_builds(d)
+            if self.in_process:
+                loops = liggghts_loop_times((d / "log.liggghts").read_text(errors="replace"))
+                if [s for _, s in loops] != [self.S, self.S]:
+                    raise RuntimeError(f"{d / 'log.liggghts'}: expected two runs of {self.S} steps, found {loops}")
+                extra["loop_S"], extra["loop_2S"] = loops[0][0], loops[1][0]
         return wall, cpu, extra
+
+    def measure(self):
+        """One timing of steps S..2S: dict(dt_wall, dt_cpu, ...) (LIGGGHTS in process: its loop time; the CPU time
+        of that loop alone is not known, dt_cpu NaN; else t(2S) - t(S) of two subprocesses, wall and CPU)."""
+        if self.in_process:
+            w, c, x = self.run(2)
+            return dict(t_process=w, cpu_process=c, loop_S=x["loop_S"], dt_wall=x["loop_2S"], dt_cpu=float("nan"),
+                        neighbor_builds_2S=x["neighbor_builds"])
+        w1, c1, x1 = self.run(1)
+        w2, c2, x2 = self.run(2)
+        m = dict(t_S=w1, t_2S=w2, cpu_S=c1, cpu_2S=c2, dt_wall=w2 - w1, dt_cpu=c2 - c1)
+        if "neighbor_builds" in x1:
+            m["neighbor_builds_S"], m["neighbor_builds_2S"] = x1["neighbor_builds"], x2["neighbor_builds"]
+        return m
 
 
 def time_demflow(scene, S, threads):
@@ -176,6 +233,7 @@ def summarise(meas, n, S):
 
 
 def bench_size(n, S, rounds, relax, alpha, timeout, engines):
+    """Time ``engines`` on the n-disc scene over ``rounds`` rounds (module docstring); returns (row, scene)."""
     scene, info = engine_scene(n, relax, alpha)
     sim0 = build(scene)
     info.update(n=n, steps_S=S, dt=float(sim0.dt), contacts_per_disc_0=contacts_per_disc(sim0),
@@ -196,11 +254,7 @@ def bench_size(n, S, rounds, relax, alpha, timeout, engines):
                 wall, cpu, extra = time_demflow(scene, S, nt)
                 m = dict(round=rnd, dt_wall=wall, dt_cpu=cpu, **extra)
             else:
-                w1, c1, x1 = runners[e].run(1)
-                w2, c2, x2 = runners[e].run(2)
-                m = dict(round=rnd, t_S=w1, t_2S=w2, cpu_S=c1, cpu_2S=c2, dt_wall=w2 - w1, dt_cpu=c2 - c1)
-                if "neighbor_builds" in x1:
-                    m["neighbor_builds_S"], m["neighbor_builds_2S"] = x1["neighbor_builds"], x2["neighbor_builds"]
+                m = dict(round=rnd, **runners[e].measure())
             m["rate_wall"] = n * S / m["dt_wall"] if m["dt_wall"] > 0 else float("nan")
             m["rate_cpu"] = n * S / m["dt_cpu"] if m["dt_cpu"] > 0 else float("nan")
             m["order"] = order
@@ -209,7 +263,8 @@ def bench_size(n, S, rounds, relax, alpha, timeout, engines):
             meas[e].append(m)
             print(f"  round {rnd} {e:>10}: {m['rate_wall']:.3e} particle-steps/s (wall), {m['rate_cpu']:.3e} (cpu); "
                   + (f"t(S) {m['t_S']:.2f} s, t(2S) {m['t_2S']:.2f} s" if "t_2S" in m else
-                     f"steps S..2S in {m['dt_wall']:.2f} s, rebuilds {m['rebuilds']}"), flush=True)
+                     f"loop times {m['loop_S']:.2f} s, {m['dt_wall']:.2f} s (process {m['t_process']:.2f} s)"
+                     if "loop_S" in m else f"steps S..2S in {m['dt_wall']:.2f} s, rebuilds {m['rebuilds']}"), flush=True)
     best = summarise(meas, n, S)
     shutil.rmtree(root, ignore_errors=True)
     return dict(n=n, info=info, engines=best), scene
@@ -301,6 +356,21 @@ def per_round_ratios(rows, a="demflow-1", b="liggghts"):
     return lines
 
 
+def cpu_text(rate):
+    """A CPU-time rate for the tables: 'n/a' where the engine's CPU time of the interval is not known."""
+    return "n/a" if not np.isfinite(rate) else f"{rate:.2e}"
+
+
+def liggghts_timing_text(rows):
+    """How the rows' LIGGGHTS rates were measured (results of before 2026-11-27 hold two processes' times)."""
+    ms = [m for row in rows for m in row["engines"].get("liggghts", {}).get("rounds", [])]
+    if ms and all("loop_S" in m for m in ms):
+        return ("LIGGGHTS one process, its deck's `run 2S` run as `run S` and `run S pre no` (no second setup: the "
+                "single run's trajectory), steps S..2S timed in process (the second run's \"Loop time\"; no CPU time "
+                "of its own: n/a)")
+    return "LIGGGHTS one process, t(2S) − t(S) of two processes"
+
+
 def markdown(rows, info):
     lines = [f"# demflow vs LIGGGHTS vs YADE: particle-steps per second ({info['date']})", "",
              f"Machine: {info['cores']} cores ({info['cpu']}); numba {info['numba']} "
@@ -310,24 +380,26 @@ def markdown(rows, info):
              *([f"Analysis (after the run): {info['analysis']}", ""] if info.get("analysis") else []),
              "Same scene in every engine: bench_dem's dense polydisperse packing relaxed under the overlap law "
              "(kN = kS = 1e6, μ = 0.5, no damping, four fixed walls, bench_dem's agitation). "
-             "rate = N·S / (t(2S) − t(S)), best of the rounds (wall clock) ± spread = (best − worst)/best over "
-             "the rounds; the best CPU-time rate in brackets. "
-             "demflow: steps S..2S timed in process; YADE `-j1`, LIGGGHTS one process.", "",
+             "rate = N·S / (time of steps S..2S), best of the rounds (wall clock) ± spread = (best − worst)/best "
+             "over the rounds; the best CPU-time rate in brackets. "
+             "demflow: steps S..2S timed in process; " + liggghts_timing_text(rows) + "; YADE `-j1`: t(2S) − t(S) "
+             "of two processes.", "",
              "| N | S | demflow 1 thr | demflow 2 thr | LIGGGHTS | YADE -j1 | demflow(1)/LIGGGHTS | "
              "demflow(1)/YADE | demflow(2)/LIGGGHTS | demflow(2)/YADE |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for row in rows:
         e = row["engines"]
         cell = lambda k: (f"{e[k]['rate_wall']:.3e} ±{100 * e[k].get('spread', float('nan')):.0f}% "  # noqa: E731
-                          f"({e[k]['rate_cpu']:.2e})" if k in e else "—")
+                          f"({cpu_text(e[k]['rate_cpu'])})" if k in e else "—")
         ratio = lambda a, b: (f"{e[a]['rate_wall'] / e[b]['rate_wall']:.2f}×" if a in e and b in e else "—")  # noqa: E731
         lines.append(f"| {row['n']:,} | {row['info']['steps_S']} | {cell('demflow-1')} | {cell('demflow-2')} | "
                      f"{cell('liggghts')} | {cell('yade')} | {ratio('demflow-1', 'liggghts')} | "
                      f"{ratio('demflow-1', 'yade')} | {ratio('demflow-2', 'liggghts')} | {ratio('demflow-2', 'yade')} |")
     for key, what in (("rate_wall_median", "Median over the rounds (less sensitive to a host whose speed changes "
                                              "between the S and the 2S run of one round)"),
-                      ("rate_min_times", "Rate from the shortest t(S) and the shortest t(2S) over the rounds (external "
-                                         "engines; a round whose t(S) run alone was disturbed reports too high a rate)")):
+                      ("rate_min_times", "Rate from the shortest t(S) and the shortest t(2S) over the rounds (engines "
+                                         "timed by two processes; a round whose t(S) run alone was disturbed reports too "
+                                         "high a rate; engines timed in process: their best round)")):
         lines += ["", what + ", one core:", "",
                   "| N | demflow 1 thr | LIGGGHTS | YADE -j1 | demflow(1)/LIGGGHTS | demflow(1)/YADE |",
                   "|---|---|---|---|---|---|"]
@@ -377,6 +449,8 @@ def main(argv=None):
     p.add_argument("--relax", type=int, default=2000, help="demflow relaxation steps before the benchmark state")
     p.add_argument("--alpha", type=float, default=30.0, help="mass-proportional damping during the relaxation")
     p.add_argument("--engines", nargs="+", default=list(ENGINE_ORDER), choices=ENGINE_ORDER)
+    p.add_argument("--yade-max", type=int, default=None,
+                   help="run YADE only at sizes up to this N (at 1e5 discs one YADE round of S = 400 takes ~5 min)")
     p.add_argument("--no-check", action="store_true", help="skip the physical-equivalence runs")
     p.add_argument("--timeout", type=float, default=600.0, help="per engine subprocess [s]")
     p.add_argument("--out", default=str(Path(__file__).resolve().parent / "results"))
@@ -388,11 +462,11 @@ def main(argv=None):
         data = json.loads(Path(a.render).read_text())
         if a.notes:  # an analysis added after the run, kept apart from the notes taken with it
             data["info"]["analysis"] = a.notes
-            Path(a.render).write_text(json.dumps(data, indent=2))
+            write_text_atomic(a.render, json.dumps(data, indent=2))
         for row in data["rows"]:
             row["engines"] = summarise({e: b["rounds"] for e, b in row["engines"].items()}, row["n"],
                                        row["info"]["steps_S"])
-        Path(a.render).with_suffix(".md").write_text(markdown(data["rows"], data["info"]))
+        write_text_atomic(Path(a.render).with_suffix(".md"), markdown(data["rows"], data["info"]))
         print(markdown(data["rows"], data["info"]))
         return
     t_all = time.perf_counter()
@@ -407,10 +481,11 @@ def main(argv=None):
     rows = []
     for k, n in enumerate(a.sizes):
         S = a.steps[min(k, len(a.steps) - 1)] if a.steps else max(10, int(round(min(1000.0, 2e7 / n))))
-        row, scene = bench_size(n, S, a.rounds, a.relax, a.alpha, a.timeout, a.engines)
+        engines = [e for e in a.engines if not (e == "yade" and a.yade_max is not None and n > a.yade_max)]
+        row, scene = bench_size(n, S, a.rounds, a.relax, a.alpha, a.timeout, engines)
         if not a.no_check:
             print(f"  equivalence run ({S} steps, snapshots at 0 and {S}) ...", flush=True)
-            row["equivalence"] = equivalence(scene, S, a.engines, a.timeout)
+            row["equivalence"] = equivalence(scene, S, engines, a.timeout)
             for e, s in row["equivalence"].items():
                 if isinstance(s, dict):
                     print(f"    {e:>8}: contacts/disc {s['contacts_per_disc_0']:.3f} -> {s['contacts_per_disc_S']:.3f}, "
@@ -433,9 +508,9 @@ def main(argv=None):
                 total_s=time.perf_counter() - t_all, args=vars(a))
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{a.tag}.json").write_text(json.dumps(dict(info=info, rows=rows), indent=2))
+    write_text_atomic(out / f"{a.tag}.json", json.dumps(dict(info=info, rows=rows), indent=2))
     md = markdown(rows, info)
-    (out / f"{a.tag}.md").write_text(md)
+    write_text_atomic(out / f"{a.tag}.md", md)
     print()
     print(md)
     print(f"written {out / (a.tag + '.json')} and {out / (a.tag + '.md')} (total {info['total_s']:.0f} s)")

@@ -5,16 +5,16 @@
 The packing is benchmarks/packing3d.py's ``dense_fcc(n)``: an FCC lattice of glass-like spheres
 (R = 1 mm ± 0.2 %), periodic along x and y, on a floor plane, Hertz-Mindlin μ = 0.5, e = 0.9, gravity;
 about 3 touching contacts per sphere from the start (a dense, stressed, nearly static packing).
-The timing protocol is bench_engines.py's (its ``ExternalRunner`` and subprocess timing are used):
-each engine runs the scene for S and for 2S steps recording nothing, so start-up, deck reading and
-setup cancel:
-    rate = N x S / (t(2S) - t(S))      [sphere-steps per second]
+The timing protocol is bench_engines.py's (its ``ExternalRunner`` is used): each engine's time of
+steps S..2S of the scene, recording nothing:
+    rate = N x S / (time of steps S..2S)      [sphere-steps per second]
 demflow: one thread, steps S..2S of one simulation timed in process (JIT warm).  LIGGGHTS: one
 process, no MPI, the benchmark deck (``Liggghts3DEngine(benchmark=True)``: atoms from a data file,
-the floor a primitive wall, no dumps; the scene in LIGGGHTS's matching shear-spring mode 'total').
-YADE ``-j1``, the benchmark deck (``Yade3DEngine(benchmark=True)``: no PyRunner during the steps).
-The engines' times are the wall times of their subprocesses, also their CPU times (getrusage of the
-children).  ``--rounds`` rounds, the engine order rotating each round; the best round is reported
+the floor a primitive wall, no dumps; the scene in LIGGGHTS's matching shear-spring mode 'total'),
+its ``run 2S`` run as ``run S`` and ``run S pre no`` (the single run's trajectory) and the second run's
+"Loop time" taken (in process, as demflow's).
+YADE ``-j1``, the benchmark deck (``Yade3DEngine(benchmark=True)``: no PyRunner during the steps),
+t(2S) - t(S) of two subprocesses (wall, and CPU from getrusage of the children).  ``--rounds`` rounds, the engine order rotating each round; the best round is reported
 with the spread (best - worst)/best, all rounds kept, and the load average before and after each.
 
 Equivalence: after every timed run each engine reports the touching sphere-sphere contacts
@@ -44,10 +44,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numba  # noqa: E402
 
-from bench_engines import ExternalRunner, acceptance_lines, per_round_ratios  # noqa: E402
+from bench_engines import (ExternalRunner, acceptance_lines, cpu_text, liggghts_timing_text,  # noqa: E402
+                           per_round_ratios)
 from packing3d import dense_fcc  # noqa: E402
 from demflow import build  # noqa: E402
-from demflow.engines.liggghts3d import Liggghts3DEngine  # noqa: E402
+from demflow.atomic import write_text_atomic  # noqa: E402
+from demflow.engines.liggghts3d import Liggghts3DEngine, read_benchmark_output  # noqa: E402
 from demflow.engines.yade3d import Yade3DEngine  # noqa: E402
 from demflow.jit import set_threads  # noqa: E402
 
@@ -94,6 +96,16 @@ def time_demflow(scene, S, threads, checkpoints=()):
     return wall, cpu, out
 
 
+def liggghts_at_S(d):
+    """The benchmark summary at step S of a deck run in two parts (bench_engines.split_run): the log up to
+    the first run's "Loop time" line read by the engine's own reader (which takes the last thermo line)."""
+    text = (Path(d) / "log.liggghts").read_text(errors="replace")
+    cut = text.index("\nLoop time")
+    with tempfile.TemporaryDirectory(prefix="liggghts_at_S_") as t:
+        (Path(t) / "log.liggghts").write_text(text[:cut] + "\nDEMFLOW-COMPLETE\n")
+        return read_benchmark_output(Path(t))
+
+
 def load():
     return [round(x, 2) for x in os.getloadavg()]
 
@@ -127,18 +139,16 @@ def bench_size(n, S, rounds, timeout, engines, liggghts_factor=1):
                 m = dict(round=rnd, dt_wall=wall, dt_cpu=cpu, **extra)
             else:
                 r = runners[e]
-                w1, c1, _ = r.run(1)
-                s1 = r.E.read(None, None, r.dirs[1])
-                w2, c2, _ = r.run(2)
-                s2 = r.E.read(None, None, r.dirs[2])
-                m = dict(round=rnd, t_S=w1, t_2S=w2, cpu_S=c1, cpu_2S=c2, dt_wall=w2 - w1, dt_cpu=c2 - c1,
-                         at_S=dict(s1), at_2S=dict(s2))
+                m = dict(round=rnd, **r.measure())
+                m["at_S"] = dict(liggghts_at_S(r.dirs[2]) if r.in_process else r.E.read(None, None, r.dirs[1]))
+                m["at_2S"] = dict(r.E.read(None, None, r.dirs[2]))
             m["rate_wall"] = n * steps[e] / m["dt_wall"] if m["dt_wall"] > 0 else float("nan")
             m["rate_cpu"] = n * steps[e] / m["dt_cpu"] if m["dt_cpu"] > 0 else float("nan")
             meas[e].append(m)
             print(f"  round {rnd} {e:>10}: {m['rate_wall']:.3e} sphere-steps/s (wall), {m['rate_cpu']:.3e} (cpu); "
                   + (f"t(S) {m['t_S']:.2f} s, t(2S) {m['t_2S']:.2f} s" if "t_2S" in m else
-                     f"steps S..2S in {m['dt_wall']:.2f} s, rebuilds {m['rebuilds']}")
+                     f"loop times {m['loop_S']:.2f} s, {m['dt_wall']:.2f} s (process {m['t_process']:.2f} s)"
+                     if "loop_S" in m else f"steps S..2S in {m['dt_wall']:.2f} s, rebuilds {m['rebuilds']}")
                   + f"; contacts/sphere at 2S {m['at_2S']['sphere_contacts'] / n:.4f}", flush=True)
         loads.append(dict(round=rnd, order=order, load_before=before, load_after=load()))
         print(f"  round {rnd}: load average before {before}, after {loads[-1]['load_after']}", flush=True)
@@ -146,7 +156,7 @@ def bench_size(n, S, rounds, timeout, engines, liggghts_factor=1):
     for e, ms in meas.items():
         rates = [m["rate_wall"] for m in ms]
         b = ms[int(np.nanargmax(rates))] if np.any(np.isfinite(rates)) else ms[0]
-        best[e] = dict(rate_wall=b["rate_wall"], rate_cpu=float(np.nanmax([m["rate_cpu"] for m in ms])),
+        best[e] = dict(rate_wall=b["rate_wall"], rate_cpu=float(max(m["rate_cpu"] for m in ms)),
                        steps_S=steps[e], rate_wall_median=float(np.nanmedian(rates)),
                        spread=float((np.nanmax(rates) - np.nanmin(rates)) / np.nanmax(rates)),
                        at_S=b["at_S"], at_2S=b["at_2S"], rounds=ms)
@@ -160,16 +170,17 @@ def markdown(rows, info):
              f"LIGGGHTS {info['liggghts']}. Command: `python benchmarks/bench_engines3d.py "
              f"{' '.join(info['argv'])}`.", "",
              "Scene: benchmarks/packing3d.py `dense_fcc(N)` (FCC lattice, R = 1 mm ± 0.2 %, periodic x/y, floor, "
-             "Hertz-Mindlin E = 70 GPa, ν = 0.3, μ = 0.5, e = 0.9, gravity). rate = N·S / (t(2S) − t(S)), best of "
-             "the rounds (wall clock), spread = (best − worst)/best over the rounds, CPU-time rate in brackets. "
+             "Hertz-Mindlin E = 70 GPa, ν = 0.3, μ = 0.5, e = 0.9, gravity). rate = N·S / (time of steps S..2S), "
+             "best of the rounds (wall clock), spread = (best − worst)/best over the rounds, CPU-time rate in brackets. "
              "demflow 1 thread, steps S..2S in process; LIGGGHTS one process (data file, primitive floor wall, "
-             "no output during the run, shear spring 'total' = its matching mode); YADE `-j1` (no PyRunner).", "",
+             "no output during the run, shear spring 'total' = its matching mode), " + liggghts_timing_text(rows)
+             + "; YADE `-j1` (no PyRunner), t(2S) − t(S) of two processes.", "",
              "S is the step count of the shorter run (LIGGGHTS's S is given after its rate).", "",
              "| N | S | demflow 1 thr | LIGGGHTS | YADE -j1 | demflow/LIGGGHTS | demflow/YADE |",
              "|---|---|---|---|---|---|---|"]
     for row in rows:
         e = row["engines"]
-        cell = lambda k: (f"{e[k]['rate_wall']:.3e} ±{e[k]['spread']:.0%} ({e[k]['rate_cpu']:.2e})"  # noqa: E731
+        cell = lambda k: (f"{e[k]['rate_wall']:.3e} ±{e[k]['spread']:.0%} ({cpu_text(e[k]['rate_cpu'])})"  # noqa: E731
                           if k in e else "—")
         ratio = lambda a, b: (f"{e[a]['rate_wall'] / e[b]['rate_wall']:.2f}×" if a in e and b in e else "—")  # noqa: E731
         lig = f" S = {e['liggghts']['steps_S']}" if "liggghts" in e else ""
@@ -272,9 +283,9 @@ def main(argv=None):
                 notes=a.notes)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{a.tag}.json").write_text(json.dumps(dict(info=info, rows=rows), indent=2))
+    write_text_atomic(out / f"{a.tag}.json", json.dumps(dict(info=info, rows=rows), indent=2))
     md = markdown(rows, info)
-    (out / f"{a.tag}.md").write_text(md)
+    write_text_atomic(out / f"{a.tag}.md", md)
     print()
     print(md)
     print(f"written {out / (a.tag + '.json')} and {out / (a.tag + '.md')} (total {info['total_s']:.0f} s)")

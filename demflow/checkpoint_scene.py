@@ -10,6 +10,9 @@ digest existed (no ``"static"`` in its meta) is loaded as before, on the scene's
 from __future__ import annotations
 
 import hashlib
+import os
+import tempfile
+from pathlib import Path
 
 import numpy as np
 
@@ -86,3 +89,10 @@ def read_checkpoint(path) -> tuple[dict, dict]:
     except (ValueError, OSError, EOFError, zipfile.BadZipFile, json.JSONDecodeError) as e:
         raise ValueError(f"{path} is not a demflow checkpoint (an .npz written by save_checkpoint): {e}") from None
     return meta, state
+
+
+def last_good_path(scene_name: str, step: int) -> Path:
+    """Where a run that blew up saves its last good state: ``$DEMFLOW_BLOWUP_DIR`` (default the system's temporary
+    directory) / ``<scene name>-last-good-step<step>.npz``."""
+    out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
+    return out / f"{scene_name}-last-good-step{step}.npz"

@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest, write_checkpoint
+from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.forces import pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
                                   spatial_order, transfer_history)
@@ -721,8 +720,7 @@ class Simulation:
         self._set_state(s)
 
     def _save_last_good(self):
-        out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
-        path = out / f"{self.scene.name}-last-good-step{self.step}.npz"
+        path = last_good_path(self.scene.name, self.step)
         self.save_checkpoint(path)
         return str(path)
 

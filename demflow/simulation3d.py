@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import time
 import warnings
 import zlib
@@ -17,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest, write_checkpoint
+from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.spheres import carry_history, sphere_pairs
 from .progress import bar as progress_bar
 from .scene import EnergyBalanceWarning, SceneError, UnsafeTimeStepWarning, check_whole
@@ -562,8 +561,7 @@ class Simulation3D:
         self._set_state(s)
 
     def _save_last_good(self):
-        out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
-        path = out / f"{self.scene.name}-last-good-step{self.step}.npz"
+        path = last_good_path(self.scene.name, self.step)
         self.save_checkpoint(path)
         return str(path)
 

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checkpoint_scene import check_same_scene, read_checkpoint, scene_digest, write_checkpoint
+from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.neighbours import pairs_cell_search, transfer_history
 from .integrate import critical_time_step
 from .jit import njit
@@ -627,11 +627,7 @@ class SuperquadricSimulation:
         self._set_state(s)
 
     def _save_last_good(self) -> str:
-        import os
-        import tempfile
-
-        out = Path(os.environ.get("DEMFLOW_BLOWUP_DIR", tempfile.gettempdir()))
-        path = out / f"{self.scene.name}-last-good-step{self.step}.npz"
+        path = last_good_path(self.scene.name, self.step)
         self.save_checkpoint(path)
         return str(path)
 

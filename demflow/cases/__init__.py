@@ -1,8 +1,12 @@
 """Registered cases: every named case of the sources, one module each.
 
-``CASES`` maps the stable name (used by ``demflow run NAME``) to the case object.
+``CASES`` maps the stable name (used by ``demflow run NAME``) to the case object.  The case interface
+(``Case``, ``CaseRun``, ``Check``, ``ReferencePlan``) is re-exported from :mod:`demflow.cases.base`.
 """
 from __future__ import annotations
+
+__all__ = ["ALIASES", "CASES", "Case", "CaseRun", "Check", "ReferencePlan", "comparison_cases", "get_case",
+           "reference_cases"]
 
 from .base import Case, CaseRun, Check, ReferencePlan
 from .thesis_one_disc import OneDisc

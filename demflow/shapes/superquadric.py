@@ -133,10 +133,8 @@ def surface_point(alpha, a, b, n):
         return a * math.copysign(abs(c) ** e, c), b * math.copysign(abs(s) ** e, s)
     u = abs(c) / a
     v = abs(s) / b
-    if u >= v:
-        r = 1.0 / (u * (1.0 + (v / u) ** n) ** (1.0 / n))
-    else:
-        r = 1.0 / (v * (1.0 + (u / v) ** n) ** (1.0 / n))
+    hi = max(u, v)
+    r = 1.0 / (hi * (1.0 + (min(u, v) / hi) ** n) ** (1.0 / n))
     return r * c, r * s
 
 
