@@ -9,7 +9,7 @@ noise: run it alternately for two roots (see benchmarks/results/core_ab.md).
 import sys, time
 root = sys.argv[1]
 sys.path.insert(0, root); sys.path.insert(0, root + "/benchmarks")
-import numpy as np, numba
+import numba
 numba.set_num_threads(1)
 import bench_dem as b
 import demflow.simulation as S

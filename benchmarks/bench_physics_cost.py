@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_dem import make_scene  # noqa: E402
-from demflow import LinearLaw, Outputs, build  # noqa: E402
+from demflow import Outputs, build  # noqa: E402
 from demflow.manifest import physics_manifest  # noqa: E402
 
 

@@ -19,7 +19,7 @@ def test_distribution_comparison_ks_and_q_model():
     same = compare_distributions(a, rng.gamma(3.0, 1 / 3.0, 2000))
     other = compare_distributions(a, rng.exponential(1.0, 2000))
     assert same["ks_pvalue"] > 0.01 and other["ks_pvalue"] < 1e-6
-    (na, cia), (nb, cib) = same["q_model_a"], same["q_model_b"]
+    (_, cia), (_, cib) = same["q_model_a"], same["q_model_b"]
     assert cia[0] < 3.0 < cia[1] and cib[0] < 3.0 < cib[1]
     assert other["q_model_b"][1][1] < 1.5  # exponential: N ≈ 1
     assert np.isclose(np.sum(same["pdf_a"] * np.diff(same["edges"])), 1.0)

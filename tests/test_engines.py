@@ -8,14 +8,13 @@ import json
 import os
 import shutil
 import stat
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from demflow import Discs, LinearLaw, Material, Scene, SceneError, Wall, build
+from demflow import SceneError, build
 from demflow.cases.cs_nine_disc import NineDisc, contact_c_force
-from demflow.cases.cs_nine_disc_engines import CASE, NineDiscEngines, engine_scene, engine_variants
+from demflow.cases.cs_nine_disc_engines import CASE, NineDiscEngines, engine_scene
 from demflow.engines import (EngineFailed, EngineNotFound, EngineOutputError, EngineTimeout, LiggghtsEngine,
                              YadeEngine, get_engine)
 from demflow.engines import reference

@@ -3,9 +3,6 @@ the check that the right setting passes, so that a pass means something.
 
 Each test runs the case's own check code on a wrong variant (cheap: seconds each).
 """
-import math
-
-import numpy as np
 import pytest
 
 from demflow.cases import get_case

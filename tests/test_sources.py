@@ -32,7 +32,7 @@ def test_case_checks_pass(name):
 
 def test_one_disc_case2_is_the_global_damping_case():
     """The swapped Table 2.1 columns: contact damping 1e4 would NOT give 72703.36 N."""
-    from demflow import ContactModel, Discs, GlobalDamping, LinearLaw, Material, Outputs, Scene, Wall
+    from demflow import GlobalDamping, LinearLaw
     sc = get_case("thesis-one-disc").scenes(get_case("thesis-one-disc").merged())["case2-global-damping"]
     sc.damping = GlobalDamping()
     sc.laws = {("disc", "plate"): LinearLaw(kn=1e7, cn=1e4)}

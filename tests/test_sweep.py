@@ -1,7 +1,6 @@
 """Sweeps on Dask (issue 17 item 6): a sweep on a local cluster of two worker processes gives the same
 table as the serial run, in the same order."""
 import pandas as pd
-import pytest
 
 from demflow.sweep import case_sweep, parameter_grid, run_sweep
 

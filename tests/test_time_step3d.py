@@ -8,12 +8,11 @@ Measured (2026-11-24): frictional elastic packing limit 1.62 × the estimate (0.
 import math
 import warnings
 
-import numpy as np
 import pytest
 
 import critical_dt3d as cd
 import demflow as df
-from demflow import (HertzMindlinLaw, LinearLaw, Material, Outputs3D, Scene3D, SceneError, Spheres,
+from demflow import (LinearLaw, Material, Outputs3D, Scene3D, SceneError, Spheres,
                      build)
 
 
