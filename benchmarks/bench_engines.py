@@ -12,15 +12,14 @@ turns bench_dem's residual overlaps into forces, the packing is first relaxed in
 bench_dem's agitation velocities are the benchmark's initial state: dense (~3.6 contacts
 per disc), stressed, agitated, the same in every engine.
 
-Each engine runs that scene for S and for 2S steps (demflow with 1 and with 2 threads,
-YADE ``-j1``, LIGGGHTS one process, no MPI), recording nothing (``Outputs(every=0)``), so
-start-up, deck reading and setup cancel:
-    rate = N x S / (t(2S) - t(S))      [particle-steps per second]
+Each engine runs that scene recording nothing (``Outputs(every=0)``; demflow with 1 and with 2
+threads, YADE ``-j1``, LIGGGHTS one process, no MPI) and is timed over steps S..2S:
+    rate = N x S / (time of steps S..2S)      [particle-steps per second]
 (demflow: wall time of steps S..2S of one simulation, in process, JIT warm; LIGGGHTS: the same
 interval in its process, its deck's ``run 2S`` run as ``run S`` and ``run S pre no`` and the second
 run's "Loop time" taken: no start-up, deck reading or setup in it, and no drift of the host between
-two processes, which made t(2S) - t(S) scatter by up to 44 %).  YADE's times are the wall times
-of its subprocesses, also their CPU times (getrusage of the children).  ``--rounds`` rounds are run,
+two processes, which made t(2S) - t(S) scatter by up to 48 %).  YADE: runs of S and of 2S steps,
+t(2S) - t(S) of their wall times, also of their CPU times (getrusage of the children).  ``--rounds`` rounds are run,
 the engine order rotating each round; the best round is reported, all are kept.
 
 Physical equivalence: a separate, untimed run of S steps per engine records the snapshots
@@ -142,7 +141,7 @@ def split_run(deck, S):
     if len(at) != 1:
         raise RuntimeError(f"{deck}: expected one 'run {2 * S}' line, found {len(at)}")
     lines[at[0]:at[0] + 1] = [f"run {S}", f"run {S} pre no"]
-    Path(deck).write_text("\n".join(lines) + "\n")
+    write_text_atomic(deck, "\n".join(lines) + "\n")
 
 
 class ExternalRunner:

@@ -24,7 +24,6 @@ import argparse
 import json
 import os
 import platform
-import re
 import subprocess
 import sys
 import tempfile
@@ -32,6 +31,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 ENGINES = ("demflow", "liggghts", "yade")
 
@@ -81,10 +81,8 @@ def time_yade(S: int) -> dict:
     return dict(steps=int(res["steps"]), wall_s=float(res["wall_s"]), clumps=int(res["clumps"]))
 
 
-LOOP = re.compile(r"^Loop time of ([0-9.eE+-]+) on \d+ procs for (\d+) steps")
-
-
 def time_liggghts(S: int) -> dict:
+    from bench_engines import liggghts_loop_times
     from demflow.build import build
     from demflow.cases.miyata_uniaxial3d import insertion_scene
     from demflow.engines.liggghts_uniaxial3d import LiggghtsUniaxial3DEngine
@@ -96,12 +94,8 @@ def time_liggghts(S: int) -> dict:
         eng.write_deck(sc, build(sc), Path(tmp))
         subprocess.run(eng.command(Path(tmp)), cwd=tmp, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
                        env=dict(os.environ, OMP_NUM_THREADS="1"), check=True, timeout=3600)
-        wall, steps = 0.0, 0
-        for line in (Path(tmp) / "log1.liggghts").read_text().splitlines():
-            m = LOOP.match(line)
-            if m:
-                wall += float(m.group(1))
-                steps += int(m.group(2))
+        loops = liggghts_loop_times((Path(tmp) / "log1.liggghts").read_text())
+        wall, steps = sum(t for t, _ in loops), sum(s for _, s in loops)
     # the deck's first runs (insertion: 1 step; each settle chunk: 5000) are all counted
     return dict(steps=steps, wall_s=wall, clumps=int(p["n_insert"]))
 
