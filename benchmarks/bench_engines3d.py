@@ -97,13 +97,9 @@ def time_demflow(scene, S, threads, checkpoints=()):
 
 
 def liggghts_at_S(d):
-    """The benchmark summary at step S of a deck run in two parts (bench_engines.split_run): the log up to
-    the first run's "Loop time" line read by the engine's own reader (which takes the last thermo line)."""
-    text = (Path(d) / "log.liggghts").read_text(errors="replace")
-    cut = text.index("\nLoop time")
-    with tempfile.TemporaryDirectory(prefix="liggghts_at_S_") as t:
-        (Path(t) / "log.liggghts").write_text(text[:cut] + "\nDEMFLOW-COMPLETE\n")
-        return read_benchmark_output(Path(t))
+    """The benchmark summary at step S of a deck run in two parts (bench_engines.split_run): the end of the
+    log's first run."""
+    return read_benchmark_output(Path(d), run=0)
 
 
 def load():

@@ -292,6 +292,25 @@ SPHERES_ESTIMATE = ("spheres (demflow.integrate.safe_time_step_3d: every sphere 
                     "up to scene.max_overlap={max_overlap:g} of the smaller radius)")
 
 
+def critical_estimate(scene, family, mats, particle: str, radius, m_rho, mass, radius_name: str) -> tuple[float, str]:
+    """The critical time-step estimate [time] that ``scene.dt_fraction`` scales, and how it was formed: for a
+    Hertzian law the Rayleigh-wave time of radius ``radius`` (named ``radius_name`` in the description) and
+    mass ``m_rho`` (:func:`rayleigh_time_step`), refusing a particle material with an infinite Young's
+    modulus; for a linear law 2√(m_min/k_max) with the particles' ``mass``.  ``particle`` names the particles
+    in the refusal ("sphere", "ellipsoid")."""
+    if isinstance(family, HertzMindlin):
+        E = np.array([scene.materials[m].young for m in mats], np.float64)
+        nu = np.array([scene.materials[m].poisson for m in mats], np.float64)
+        if not np.all(np.isfinite(E)):
+            k = int(np.argmax(~np.isfinite(E)))
+            raise SceneError(f"{particle} {k} has material {mats[k]!r} with young={E[k]}: only a plane can be rigid; "
+                             f"give the {particle}s' material a finite Young's modulus")
+        return (rayleigh_time_step(radius, m_rho, E, nu),
+                f"the Rayleigh-wave time π{radius_name}√(ρ/G)/(0.1631ν + 0.8766)")
+    kmax = max(max(law.kn, law.ks) for law in family.laws_by_pair.values())
+    return 2.0 * math.sqrt(float(mass.min()) / kmax), "2√(m_min/k_max)"
+
+
 def _chosen_step(scene, dt_crit: float, how: str) -> float:
     """The time step: ``scene.dt_fraction`` × the critical estimate ``dt_crit`` (``how`` names it), or
     ``scene.dt``, refused above the estimate unless ``scene.allow_supercritical``."""
@@ -464,22 +483,10 @@ def build3d(scene: Scene3D) -> Simulation3D:
 
     # the critical time step
     inertia = 0.4 * mass * r ** 2
-    if isinstance(family, HertzMindlin):
-        E = np.array([scene.materials[m].young for m in mats], np.float64)
-        nu = np.array([scene.materials[m].poisson for m in mats], np.float64)
-        if not np.all(np.isfinite(E)):
-            k = int(np.argmax(~np.isfinite(E)))
-            raise SceneError(f"sphere {k} has material {mats[k]!r} with young={E[k]}: only a plane can be rigid; "
-                             "give the spheres' material a finite Young's modulus")
-        # members carry their clump's mass (for the dashpots): their density is the material's
-        dens = np.array([scene.materials[m].density for m in mats], np.float64)
-        m_rho = np.where((fixed == 2) & (dens > 0), dens * 4.0 / 3.0 * math.pi * libm.cube(r), mass)
-        dt_crit = rayleigh_time_step(r, m_rho, E, nu)
-        how = "the Rayleigh-wave time πR√(ρ/G)/(0.1631ν + 0.8766)"
-    else:
-        kmax = max(max(law.kn, law.ks) for law in family.laws_by_pair.values())
-        dt_crit = 2.0 * math.sqrt(float(mass.min()) / kmax)
-        how = "2√(m_min/k_max)"
+    # members carry their clump's mass (for the dashpots): their density is the material's
+    dens = np.array([scene.materials[m].density for m in mats], np.float64)
+    m_rho = np.where((fixed == 2) & (dens > 0), dens * 4.0 / 3.0 * math.pi * libm.cube(r), mass)
+    dt_crit, how = critical_estimate(scene, family, mats, "sphere", r, m_rho, mass, "R")
     dt = _chosen_step(scene, dt_crit, how)
     dt_safe = _safe_step(scene, family, r, mass, mats, mat, index, walls, body, bodies)
     _check_safe_step(scene, dt, dt_safe)

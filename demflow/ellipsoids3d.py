@@ -19,10 +19,8 @@ import numpy as np
 
 from . import libm
 from .build3d import (_array, _check_safe_step, _chosen_step, _common_length, _law_family, _skin_and_box, _walls,
-                      particle_materials, quat_to_matrix, rayleigh_time_step, refuse_rotational_dashpot,
-                      time_step_laws)
+                      critical_estimate, particle_materials, quat_to_matrix, refuse_rotational_dashpot, time_step_laws)
 from .contacts.ellipsoids import WARM_COLUMNS
-from .laws.hertz_mindlin import HertzMindlin
 from .scene import SceneError
 from .shapes.ellipsoid import rotations
 from .simulation3d import Simulation3D
@@ -132,20 +130,9 @@ def build_ellipsoids(scene) -> SimulationEllipsoids:
     planes, tris, loading = _walls(scene, walls, index)
     skin, box = _skin_and_box(scene, r)
 
-    if isinstance(family, HertzMindlin):
-        E = np.array([scene.materials[m].young for m in mats], np.float64)
-        nu = np.array([scene.materials[m].poisson for m in mats], np.float64)
-        if not np.all(np.isfinite(E)):
-            k = int(np.argmax(~np.isfinite(E)))
-            raise SceneError(f"ellipsoid {k} has material {mats[k]!r} with young={E[k]}: only a plane can be rigid; "
-                             "give the ellipsoids' material a finite Young's modulus")
-        # the Rayleigh time of a sphere of the smallest semi-axis and the material's density (conservative)
-        dt_crit = rayleigh_time_step(amin, rho * 4.0 / 3.0 * math.pi * libm.cube(amin), E, nu)
-        how = "the Rayleigh-wave time πa_min√(ρ/G)/(0.1631ν + 0.8766)"
-    else:
-        kmax = max(max(law.kn, law.ks) for law in family.laws_by_pair.values())
-        dt_crit = 2.0 * math.sqrt(float(mass.min()) / kmax)
-        how = "2√(m_min/k_max)"
+    # the Rayleigh time of a sphere of the smallest semi-axis and the material's density (conservative)
+    dt_crit, how = critical_estimate(scene, family, mats, "ellipsoid", amin,
+                                     rho * 4.0 / 3.0 * math.pi * libm.cube(amin), mass, "a_min")
     dt = _chosen_step(scene, dt_crit, how)
     dt_safe = _safe_step_ellipsoids(scene, family, axes, mass, moments, mats, mat, index, walls)
     _check_safe_step(scene, dt, dt_safe, ELLIPSOIDS_ESTIMATE)

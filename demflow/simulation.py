@@ -16,7 +16,7 @@ import numpy as np
 
 from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.forces import pack_discs, pair_forces
-from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search,
+from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search_ordered,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
 from .integrate import Q_WIDTH
@@ -302,15 +302,16 @@ class Simulation:
         d = self.discs
         wrap(self.box, d.x, d.y, self.ix, self.iy)
         ax, ay, bx, by = self.wall_endpoints()
+        # the steps run on the discs renumbered in spatial order (see stepping.run_steps): the cell order of the
+        # search's own grid where there is one
         if isinstance(self.box, PeriodicBox):
             finder, other, sx, sy = pairs_periodic(d.x, d.y, d.r, self.skin, ax, ay, bx, by, self.box)
+            perm = spatial_order(d.x, d.y, d.r, self.skin)
         else:
-            finder, other = pairs_cell_search(d.x, d.y, d.r, self.skin, ax, ay, bx, by)
+            finder, other, perm = pairs_cell_search_ordered(d.x, d.y, d.r, self.skin, ax, ay, bx, by)
             sx = sy = np.empty(0)
         old = self.pairs
         hist = transfer_history(old.finder, old.other, old.hist, finder, other, self.n + self.nw)
-        # the steps run on the discs renumbered in spatial order (see stepping.run_steps)
-        perm = spatial_order(d.x, d.y, d.r, self.skin)
         self._install_pairs(finder, other, hist, sx, sy, perm)
         d.xref[:] = d.x
         d.yref[:] = d.y

@@ -33,6 +33,21 @@ def test_loop_times_are_read_in_order_with_their_step_counts():
     assert liggghts_loop_times("Pair time (%) = 0.3\nNeighbor list builds = 4\n") == []
 
 
+def test_benchmark_reader_gives_the_end_of_the_run_asked_for(tmp_path):
+    """The engine's reader of the benchmark log: run=-1 (default) the last thermo line, run=0 the first run's last
+    (the state at step S of a split deck); a run the log does not hold is refused by name."""
+    from demflow.engines.base import EngineOutputError
+    from demflow.engines.liggghts3d import read_benchmark_output
+
+    (tmp_path / "log.liggghts").write_text(LOG.replace("c_csum", "csum") + "DEMFLOW-COMPLETE\n")
+    last, first = read_benchmark_output(tmp_path), read_benchmark_output(tmp_path, run=0)
+    assert (last["steps"], last["kinetic"], last["sphere_contacts"]) == (400, 0.0001, 3510.0)
+    assert (first["steps"], first["kinetic"], first["sphere_contacts"]) == (200, 0.00011, 3515.0)
+    assert read_benchmark_output(tmp_path, run=1) == last
+    with pytest.raises(EngineOutputError, match="run=2 asked of .* holds 2 run"):
+        read_benchmark_output(tmp_path, run=2)
+
+
 def test_split_run_rewrites_the_one_run_of_2S_and_nothing_else(tmp_path):
     deck = tmp_path / "deck.in"
     deck.write_text("thermo 1000\nrun 400\nprint \"DEMFLOW-COMPLETE\"\n")

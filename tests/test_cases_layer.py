@@ -174,7 +174,7 @@ def test_reference_and_compare_choices_come_from_the_registry():
     assert set(reference_cases()) == with_engines | {"miyata-uniaxial-2d-engines"}
     assert set(comparison_cases()) == with_engines | {"miyata-uniaxial-2d-engines"}
     plan_u = CASES["miyata-uniaxial-3d"].reference_plan()
-    assert plan_u.variants("yade") == ("seed1", "seed2") and plan_u.engine("liggghts", "seed2").params["seed"] == 2
+    assert plan_u.variants("yade") == tuple(f"seed{s}" for s in range(1, 9)) and plan_u.engine("liggghts", "seed2").params["seed"] == 2
     plan3 = CASES["conformance-3d"].reference_plan()
     assert plan3.engine("yade", "oblique-plane-r2").compensate_walls is False  # the engine object comes from the plan
     plan = CASES["cs-nine-disc"].reference_plan()

@@ -2,6 +2,7 @@
 curvature against Miyata eqs 46, plane and triangle contacts, energy of an elastic gas, errors."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -546,3 +547,21 @@ def test_an_imaged_mesh_acts_on_an_ellipsoid_as_the_plane():
     with pytest.warns(df.PeriodicMeshWarning):
         off = one(df.TriangleMesh("ground", v, tri, "rock", periodic_images=False), "off")
     assert np.abs(off.spheres.FM).max() == 0.0
+
+
+@pytest.mark.parametrize("kind", ["sphere", "ellipsoid"])
+def test_a_rigid_particle_material_is_refused_by_name(kind):
+    """Only a wall may be rigid (young = inf): the Rayleigh-wave estimate of Δt needs a particle's finite E.
+    The refusal names the particle, its material and the value (:func:`demflow.build3d.critical_estimate`, shared
+    by spheres and ellipsoids)."""
+    rigid = df.Material(density=2700.0, young=math.inf, poisson=0.2)
+    parts = (dict(spheres=df.Spheres(x=[0.0], y=[0.0], z=[0.5], radius=[0.1], material="stone"), ellipsoids=None)
+             if kind == "sphere" else
+             dict(spheres=None, ellipsoids=df.Ellipsoids(axes=[[0.3, 0.2, 0.12]], x=[0.0], y=[0.0], z=[0.5],
+                                                         material="stone")))
+    sc = df.Scene3D(name="rigid", materials={"stone": rigid}, laws={("stone", "stone"): df.HertzMindlinLaw(friction=0.4)},
+                    **parts)
+    with pytest.raises(df.SceneError, match=rf"{kind} 0 has material 'stone' with young=inf: only a plane can be "
+                                            rf"rigid; give the {kind}s' material a finite Young's modulus"):
+        df.build(sc)
+    df.build(dataclasses.replace(sc, materials={"stone": dataclasses.replace(rigid, young=7e10)}))  # finite E: builds

@@ -336,3 +336,56 @@ def test_shear_spring_option_sets_the_law_and_keys_checkpoints_apart(tmp_path):
     assert ProtocolCheckpoints(tmp_path, tot).dir != ProtocolCheckpoints(tmp_path, p).dir
     no_key = {k: v for k, v in p.items() if k != "shear_spring"}
     assert ProtocolCheckpoints(tmp_path, p).dir == ProtocolCheckpoints(tmp_path, no_key).dir
+
+
+def _synthetic_seeds(rng, n, shift=0.0, prefix="s"):
+    """{label: statistics} of n runs: three statistics drawn independently, N(100, 10), N(2.0, 0.05), N(50, 5),
+    the first shifted by ``shift`` standard deviations."""
+    return {f"{prefix}{k}": {"a": float(rng.normal(100.0 + 10.0 * shift, 10.0)), "b": float(rng.normal(2.0, 0.05)),
+                             "c": float(rng.normal(50.0, 5.0))} for k in range(n)}
+
+
+def test_holm_adjustment_matches_its_definition():
+    from demflow.cases.miyata_uniaxial3d import holm
+
+    # p sorted: 0.01, 0.02, 0.04 (m = 3): 3 × 0.01, max(0.03, 2 × 0.02), max(0.04, 1 × 0.04); nan kept out and as is
+    out = holm({"x": 0.04, "y": 0.01, "z": 0.02, "w": math.nan})
+    assert out["y"] == pytest.approx(0.03) and out["z"] == pytest.approx(0.04) and out["x"] == pytest.approx(0.04)
+    assert math.isnan(out["w"])
+    assert holm({"x": 0.6, "y": 0.5})["x"] == 1.0  # capped at 1
+
+
+def test_engine_ensemble_passes_draws_of_demflows_distribution_and_fails_a_shift():
+    """miyata3d.engine-ensemble's negative control on synthetic seeds: 8 + 8 runs from one distribution pass the
+    Holm-adjusted Welch lines in at least 90 of 100 draws (family-wise level 5 %); a shift of 3 s.d. in one
+    statistic fails in at least 90 of 100 (Welch's power at 8 + 8 and 3 s.d. is about 0.99)."""
+    from demflow.cases.miyata_uniaxial3d import ENSEMBLE_ALPHA, ensemble_comparison
+
+    rng = np.random.default_rng(20261128)
+    same = shifted = 0
+    for _ in range(100):
+        d = _synthetic_seeds(rng, 8)
+        same += all(r["holm p"] >= ENSEMBLE_ALPHA for r in ensemble_comparison(d, _synthetic_seeds(rng, 8, 0.0, "e")).values())
+        rows = ensemble_comparison(d, _synthetic_seeds(rng, 8, 3.0, "e"))
+        shifted += rows["a"]["holm p"] < ENSEMBLE_ALPHA
+    assert same >= 90 and shifted >= 90
+
+
+def test_engine_ensemble_negative_control_fails_ten_percent_more_particles():
+    from demflow.cases.miyata_uniaxial3d import ensemble_negative_control
+
+    rng = np.random.default_rng(7)
+    per_seed = {s: {"particles after trimming": float(76 + rng.integers(0, 5)), "bed top before loading [m]":
+                    float(rng.normal(2.1, 0.03))} for s in range(1, 9)}
+    c = ensemble_negative_control(per_seed)
+    assert c.passed and c.value < 0.05
+    assert not ensemble_negative_control(per_seed, factor=1.0).passed  # the unchanged seeds are not "different"
+
+
+def test_miss_rate_test_is_one_sided_fisher():
+    from demflow.cases.miyata_uniaxial3d import miss_rate_test
+
+    # 2 misses among 16 runs, 8 of them the engine's: P(X >= 1) = 1 - C(14, 8)/C(16, 8) (hypergeometric)
+    assert miss_rate_test(1, 8, 1, 8) == pytest.approx(1.0 - math.comb(14, 8) / math.comb(16, 8), rel=1e-12)
+    assert miss_rate_test(7, 8, 1, 8) < 0.01
+    assert miss_rate_test(0, 8, 5, 8) == 1.0

@@ -209,3 +209,36 @@ def test_leave_one_out_counts_how_often_a_fair_draw_misses_the_band():
     vals = [1.0, 1.01, 1.02, 1.03, 1.04, 1.05, 1.06, 1.07, 1.2]
     per_seed = {k: {"narrow": v, "wide": [0.1, 5.0, 0.2, 4.0, 0.3, 3.0, 0.5, 2.0, 1.0][k]} for k, v in enumerate(vals)}
     assert leave_one_out_misses(per_seed) == (9, 1, 1)
+
+
+def test_an_engine_with_eight_runs_is_judged_as_an_ensemble():
+    """With >= 4 stored runs an engine's per-run lines are informative (one draw each) and its runs are judged
+    together against demflow's seeds (tolerance miyata3d.engine-ensemble): draws of demflow's own distribution
+    pass, beds 5 cm higher fail the plate-height lines and the miss-rate line; the page's negative control
+    (10 % more particles) is present and passes (i.e. the test finds that difference).  LIGGGHTS is counted
+    against the band without local damping only."""
+    from demflow.cases.base import CaseRun
+
+    case = get_case("miyata-uniaxial-3d")
+    p = case.merged()
+    band = {s: _synthetic(s) for s in range(1, 9)}
+    undamped = {s: _synthetic(s + 40) for s in range(1, 9)}
+    for shift, ok in ((0.0, True), (0.05, False)):
+        engines = {f"{e} seed{s}": _synthetic(100 * k + s, height_shift=shift)
+                   for k, e in enumerate(("yade", "liggghts"), 1) for s in range(1, 9)}
+        checks = case._cross_code_checks(CaseRun({}, {"band": band, "band_undamped": undamped, "engines": engines}), p)
+        per_run = [c for c in checks if c.name.startswith("yade seed")]
+        assert per_run and all(c.informative for c in per_run)
+        ens = [c for c in checks if c.name.startswith("yade runs as an ensemble") and not c.informative]
+        assert ens and all("no local damping" not in c.name for c in ens)
+        height = [c for c in ens if "plate height at 400 kPa" in c.name]
+        assert len(height) == 1 and height[0].passed is ok
+        assert height[0].name.endswith("≥ 0.05" if ok else "< 0.05")  # the name states the outcome
+        miss = next(c for c in ens if "runs with a statistic outside the band" in c.name)
+        assert miss.passed is ok
+        lig = [c for c in checks if c.name.startswith("liggghts runs as an ensemble") and not c.informative]
+        assert lig and all("no local damping" in c.name for c in lig)
+        assert any(c.name.startswith("liggghts runs as an ensemble") and c.informative and "no local damping" not in c.name
+                   for c in checks)
+        control = [c for c in checks if c.name.startswith("negative control")]
+        assert len(control) == 1 and control[0].passed

@@ -494,6 +494,87 @@ def leave_one_out_misses(per_seed: dict) -> tuple[int, int, int]:
     return judged, outside, len(missed)
 
 
+ENSEMBLE_MIN_RUNS = 4  # an engine with this many stored runs is judged as an ensemble (one draw each below)
+ENSEMBLE_ALPHA = tol("miyata3d.engine-ensemble").value
+
+
+def _vs_level(p: float) -> str:
+    """'≥ 0.05' or '< 0.05': a p-value against the ensemble tests' level, as the line's name states it."""
+    return f"{'≥' if p >= ENSEMBLE_ALPHA else '<'} {ENSEMBLE_ALPHA:g}"
+
+
+def judge_value(v: float, vals) -> bool | None:
+    """One run's statistic ``v`` against the 95 % band of the seeds' ``vals`` by the rule engine runs are judged
+    by: False outside (a non-finite value, e.g. a stress never reached, is outside), True inside, None when it
+    cannot be judged (no band, or inside a band wider than :data:`BAND_INFORMATIVE` of its mean)."""
+    lo, hi = band_of(vals)
+    finite = [x for x in vals if math.isfinite(x)]
+    if not (finite and math.isfinite(lo)):
+        return None
+    inside = bool(lo <= v <= hi)
+    if inside and not (0.5 * (hi - lo) <= BAND_INFORMATIVE * abs(float(np.mean(finite)))):
+        return None
+    return inside
+
+
+def run_has_miss(st: dict, per_seed: dict) -> bool:
+    """Whether a run's statistics ``st`` miss the band of ``per_seed`` ({seed: statistics}) in any judged one."""
+    return any(judge_value(st[k], [v[k] for v in per_seed.values()]) is False for k in st)
+
+
+def holm(p: dict) -> dict:
+    """Holm's step-down adjustment of the p-values ``p`` ({name: p}; non-finite ones left out and kept as they
+    are): the family-wise error over the finite ones stays at the level each adjusted p is compared with."""
+    names = sorted((k for k, v in p.items() if math.isfinite(v)), key=lambda k: p[k])
+    m = len(names)
+    out = dict(p)
+    running = 0.0
+    for i, k in enumerate(names):
+        running = max(running, min(1.0, (m - i) * p[k]))
+        out[k] = running
+    return out
+
+
+def ensemble_comparison(demflow: dict, engine: dict) -> dict[str, dict]:
+    """An engine's runs against demflow's seeds as two samples, per statistic of :func:`run_statistics`
+    (``demflow``, ``engine``: {label: statistics}): means, s.d., Welch's two-sided p
+    (:func:`demflow.cases.miyata_ksweep.compare_shapes`, the K-sweep's rule) and Holm's adjustment of those p
+    over the statistics ("holm p")."""
+    from .miyata_ksweep import compare_shapes
+
+    rows = compare_shapes({"demflow": demflow, "engine": engine}, reference="demflow")
+    eng = rows["engine"]
+    adj = holm({k: r["welch p"] for k, r in eng.items()})
+    for k, r in eng.items():
+        r["holm p"] = adj[k]
+        r["demflow mean"], r["demflow sd"], r["demflow n"] = (rows["demflow"][k]["mean"], rows["demflow"][k]["sd"],
+                                                              rows["demflow"][k]["n"])
+    return eng
+
+
+def miss_rate_test(engine_misses: int, engine_runs: int, demflow_misses: int, demflow_runs: int) -> float:
+    """One-sided Fisher exact p that an engine's runs miss demflow's band more often than demflow's own seeds
+    do (each seed against the band of the others): runs with at least one miss out of runs, per side."""
+    from scipy import stats
+
+    table = [[engine_misses, engine_runs - engine_misses], [demflow_misses, demflow_runs - demflow_misses]]
+    return float(stats.fisher_exact(table, alternative="greater").pvalue)
+
+
+def ensemble_negative_control(per_seed: dict, factor: float = 1.1) -> "Check":
+    """The ensemble test's negative control on the page's own seeds: the same seeds with ``factor`` × the particles
+    after trimming (what 10 % more particles would give, the bed otherwise unchanged), judged as an engine
+    ensemble, must be found different (some Holm-adjusted p below miyata3d.engine-ensemble's level)."""
+    key = "particles after trimming"
+    wrong = {f"control {s}": dict(v, **{key: factor * v[key]}) for s, v in per_seed.items()}
+    rows = ensemble_comparison(per_seed, wrong)
+    ph = min(r["holm p"] for r in rows.values() if math.isfinite(r["holm p"]))
+    return Check.condition(f"negative control: demflow's seeds with {factor:g} × the particles judged as an engine "
+                           f"ensemble are found different (smallest Holm-adjusted p = {ph:.3g} {_vs_level(ph)})",
+                           ph < ENSEMBLE_ALPHA, ph, SRC, "The ensemble lines can fail: a bed with 10 % more particles, "
+                           "all else equal, fails them.", kind="cross-code")
+
+
 def engine_of(label: str) -> str:
     """The engine of a run label ("yade seed2" → "yade")."""
     return label.split()[0]
@@ -660,8 +741,11 @@ class MiyataUniaxial3D(Case):
         "Contacts and forces on the plate and floor are per particle (members summed).",
         "Seed band: the protocol run for seeds seed .. seed + band_seeds - 1 (different random orientations on the "
         "insertion lattice), 95 % prediction band of one more seed (t distribution); each engine's stored runs of "
-        "seeds seed .. seed + engine_seeds - 1 are judged against it, each as one more draw (a chaotic bed: one "
-        "engine run is one sample). YADE starts from demflow's lattice and orientations; LIGGGHTS inserts its own bed "
+        "seeds seed .. seed + engine_seeds - 1 (8) are each shown against it as one more draw (a chaotic bed: one "
+        "engine run is one sample) and judged together, as a sample of the engine's beds against demflow's seeds: "
+        "Welch's test per statistic with Holm's adjustment, the share of runs outside the band against demflow's "
+        "own leave-one-out share, and the plate forces' KS distances (tolerance miyata3d.engine-ensemble; an engine "
+        "with fewer than 4 runs is judged run by run). YADE starts from demflow's lattice and orientations; LIGGGHTS inserts its own bed "
         "and has no local damping (the capabilities rows below). A band wider than ±50 % of its mean is shown, not "
         "counted (tolerance miyata3d.band-informative).",
         "The stress-settlement curve is compared at fixed stresses (100-600 kPa), as the plate's height and as the "
@@ -677,7 +761,7 @@ class MiyataUniaxial3D(Case):
     slow = False
     params = dict(shape="clumps", box=2.0, n_insert=80, K=8, seed=1, trim=2.0, plate_speed=0.02, stress_max=600e3, dt_fraction=0.2,
                   local_damping=0.3, young=7e10, record_every=200, settle_max=400000, snapshots=10, plate_z_min=0.5, band_seeds=8,
-                  engine_refs=1, engine_seeds=2, undamped_band=1, workers=None, checkpoint_dir="", progress=None,
+                  engine_refs=1, engine_seeds=8, undamped_band=1, workers=None, checkpoint_dir="", progress=None,
                   insertion="lattice", shear_spring="incremental")
 
     def run(self, p) -> CaseRun:
@@ -836,11 +920,22 @@ class MiyataUniaxial3D(Case):
                                       math.nan, SRC, f"Make them with `demflow reference {self.name} --engine {e}`."))
                 continue
             matched = engine_band(ex, e)
+            ensemble = len(runs) >= ENSEMBLE_MIN_RUNS
+            one_draw = (f"Not counted: one of {e}'s {len(runs)} runs, each one draw of a chaotic bed; a fair draw misses "
+                        "a 95 % band about as often as demflow's own seeds do (the leave-one-out line), so the runs are "
+                        f"judged together: the '{e} runs as an ensemble' lines (tolerance miyata3d.engine-ensemble).")
             for label, u in runs.items():
                 for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
-                    if len(band) < 3:
-                        continue
-                    out += self._band_checks(label, u, summaries[id(band)], name, band is matched)
+                    if len(band) < 3 or (ensemble and band is not matched):
+                        continue  # an ensemble meets the other band once, below
+                    out += self._band_checks(label, u, summaries[id(band)], name, band is matched and not ensemble,
+                                             one_draw if band is matched else None)
+            if ensemble:
+                for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
+                    if len(band) >= 3:
+                        out += self._ensemble_checks(e, runs, summaries[id(band)], name, band is matched)
+        if any(len([1 for label in ex["engines"] if engine_of(label) == e]) >= ENSEMBLE_MIN_RUNS for e in self.engines):
+            out.append(ensemble_negative_control(summaries[id(ex["band"])][0]))
         for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
             if len(band) >= 4:
                 judged, outside, seeds = leave_one_out_misses(summaries[id(band)][0])
@@ -856,10 +951,11 @@ class MiyataUniaxial3D(Case):
         return out
 
     @staticmethod
-    def _band_checks(e, u, summary, name, counted) -> list:
+    def _band_checks(e, u, summary, name, counted, not_counted=None) -> list:
         """``u``'s statistics and plate-force KS distance against demflow's seed band (its :func:`band_summary`);
-        counted only when the band has the engine's physics (``counted``; else informative: what the model
-        difference does)."""
+        counted only when the band has the engine's physics and the engine is not judged as an ensemble
+        (``counted``; else informative, with the reason ``not_counted``, by default what the model difference
+        does)."""
         from scipy import stats
 
         per_seed, (ds, d_hi), pooled = summary
@@ -868,7 +964,7 @@ class MiyataUniaxial3D(Case):
         label = f"demflow's seed band{name}"
         differs = ("Not counted: this engine cannot express demflow's local damping (capabilities row "
                    "local-damping-uniaxial), so it is judged against the band without it; this line shows what "
-                   "the model difference does.")
+                   "the model difference does.") if not_counted is None else not_counted
         out = []
         for k in keys:
             vals = [v[k] for v in per_seed.values()]
@@ -905,6 +1001,74 @@ class MiyataUniaxial3D(Case):
                                        "against how far one demflow seed's falls from the others'.", kind="cross-code"))
         else:
             out.append(Check.info(what, d, SRC, differs))
+        return out
+
+    @classmethod
+    def _ensemble_checks(cls, e, runs, summary, name, counted=True) -> list:
+        """An engine's runs judged together against demflow's seeds with the engine's physics (issue 14 item 4,
+        once the engine has :data:`ENSEMBLE_MIN_RUNS` runs): each statistic's mean by Welch's two-sided test with
+        Holm's adjustment over the statistics; the share of runs missing the band against demflow's own
+        leave-one-out share (one-sided Fisher exact); the plate forces' KS distances from demflow's pooled seeds
+        against each seed's from the others (one-sided Welch).  Each at the level of tolerance
+        miyata3d.engine-ensemble.  A statistic whose band is too wide to judge (:data:`BAND_INFORMATIVE`) is
+        shown, not counted, unless the test finds a difference.  Against the band without the engine's physics
+        (``counted`` False) every line is informative: what the model difference does."""
+        from scipy import stats
+
+        if not counted:
+            return [Check.info(c.name, c.value, SRC, "Not counted: this band lacks the engine's physics (capabilities "
+                               "row local-damping-uniaxial: LIGGGHTS has no local damping, YADE has it); this line shows "
+                               "what the model difference does.")
+                    for c in cls._ensemble_checks(e, runs, summary, name, True)]
+
+        per_seed, (ds, _), pooled = summary
+        st = {label: run_statistics(u) for label, u in runs.items()}
+        rows = ensemble_comparison(per_seed, st)
+        label = f"demflow's {len(per_seed)} seeds{name}"
+        head = f"{e} runs as an ensemble ({len(runs)} runs) vs {label}"
+        why = ("Acceptance of issue 14 item 4 with several runs per engine: the beds differ between engines (chaos, and "
+               "LIGGGHTS inserts its own bed), so the engine's runs and demflow's seeds are two samples of the "
+               "protocol's beds; a difference of means is found by Welch's two-sided test (the K-sweep's rule), "
+               "Holm-adjusted over the statistics so that the family of lines fails by chance at most "
+               f"{ENSEMBLE_ALPHA:.0%} of the time. Fails: the engine's beds differ in this statistic.")
+        out = []
+        for k, r in rows.items():
+            ph = r["holm p"]
+            what = (f"{head}: {k}, mean {r['mean']:.4g} (s.d. {r['sd']:.3g}, {r['n']} runs) vs {r['demflow mean']:.4g} "
+                    f"(s.d. {r['demflow sd']:.3g}, {r['demflow n']} seeds): Welch p = {r['welch p']:.3g}, Holm-adjusted "
+                    f"{ph:.3g}")
+            vals = [v[k] for v in per_seed.values()]
+            lo, hi = band_of(vals)
+            wide = not (math.isfinite(lo) and 0.5 * (hi - lo) <= BAND_INFORMATIVE * abs(r["demflow mean"]))
+            if not math.isfinite(ph):
+                out.append(Check.info(f"{what} (no test: fewer than two finite values on a side)", math.nan, SRC, why))
+            elif wide and ph >= ENSEMBLE_ALPHA:
+                out.append(Check.info(f"{what} ≥ {ENSEMBLE_ALPHA:g}, band too wide to judge", ph, SRC,
+                                      "Not counted as a pass: demflow's band of this statistic is wider than "
+                                      f"{BAND_INFORMATIVE:.0%} of its mean (the per-run rule), so agreement here says "
+                                      "little; a difference found would still count."))
+            else:
+                out.append(Check.condition(f"{what} {_vs_level(ph)}", ph >= ENSEMBLE_ALPHA, ph, SRC, why,
+                                           kind="cross-code"))
+        e_miss = sum(run_has_miss(v, per_seed) for v in st.values())
+        d_miss = sum(run_has_miss(per_seed[s], {q: v for q, v in per_seed.items() if q != s}) for s in per_seed)
+        p = miss_rate_test(e_miss, len(st), d_miss, len(per_seed))
+        out.append(Check.condition(
+            f"{head}: runs with a statistic outside the band {e_miss} of {len(st)}, demflow's seeds against the band of "
+            f"the others {d_miss} of {len(per_seed)}: one-sided Fisher p = {p:.3g} {_vs_level(p)}",
+            p >= ENSEMBLE_ALPHA, p, SRC,
+            "Whether the engine's runs miss demflow's band more often than demflow's own seeds do, by the per-run rule "
+            "(a run misses when any judged statistic lies outside). Fails: the engine's beds fall outside more often "
+            "than a fair draw of demflow's.", kind="cross-code"))
+        de = np.asarray([stats.ks_2samp(pooled_f(u), pooled).statistic for u in runs.values() if pooled_f(u).size])
+        if de.size >= 2 and len(ds) >= 2:
+            p = float(stats.ttest_ind(de, ds, equal_var=False, alternative="greater").pvalue)
+            out.append(Check.condition(
+                f"{head}: KS distance of each run's plate f = F/<F> from demflow's pooled seeds, mean {de.mean():.3g} "
+                f"({de.size} runs) vs each seed's from the others {np.mean(ds):.3g}: one-sided Welch p = {p:.3g} "
+                f"{_vs_level(p)}", p >= ENSEMBLE_ALPHA, p, SRC,
+                "Whether the engine's plate-force distributions lie farther from demflow's than one demflow seed's "
+                "lies from the others'.", kind="cross-code"))
         return out
 
     def observables(self, run, p):
@@ -1181,11 +1345,17 @@ def engine_figures(ex, outdir) -> list:
         lohi = np.array([band_of(rows[:, k]) for k in range(len(s_grid))])
         a.fill_betweenx(s_grid / 1e3, lohi[:, 0] * scale, lohi[:, 1] * scale, color="0.85", alpha=0.7,
                         label=f"demflow 95 % band ({len(band)} seeds; grey: each seed)")
+    counts = {engine_of(e): sum(engine_of(x) == engine_of(e) for x in ex["engines"]) for e in ex["engines"]}
+    shown = set()
     for e, u in ex["engines"].items():
+        eng = engine_of(e)
         style = "-" if e.endswith("seed1") or " " not in e else "--"
-        colour = ENGINE_COLOURS.get(engine_of(e), "k")
-        ax.plot(u.curve.settlement * 1e3, u.curve.plate_stress / 1e3, style, color=colour, lw=1.4, label=e)
-        ah.plot(u.curve.plate_z, u.curve.plate_stress / 1e3, style, color=colour, lw=1.4, label=e)
+        colour = ENGINE_COLOURS.get(eng, "k")
+        # one legend entry per engine (its runs in one colour; solid: seed 1)
+        label = (e if counts[eng] == 1 else f"{eng} ({counts[eng]} runs; solid: seed 1)") if eng not in shown else None
+        shown.add(eng)
+        ax.plot(u.curve.settlement * 1e3, u.curve.plate_stress / 1e3, style, color=colour, lw=1.0, label=label)
+        ah.plot(u.curve.plate_z, u.curve.plate_stress / 1e3, style, color=colour, lw=1.0, label=label)
     for a in (ax, ah):
         for s in (100, 400):
             a.axhline(s, color="0.5", lw=0.6, ls=":")
@@ -1199,12 +1369,16 @@ def engine_figures(ex, outdir) -> list:
     paths.append(save_figure(fig, f"{outdir}/engines_stress_settlement.png"))
 
     fig, axs = plt.subplots(2, 2, figsize=(11, 8))
-    runs = {"demflow (all seeds)": None, **ex["engines"]}
+    # demflow's seeds pooled, and each engine's runs pooled
+    runs = {f"demflow ({len(band)} seeds)": list(band.values())}
+    for e, u in ex["engines"].items():
+        runs.setdefault(engine_of(e), []).append(u)
+    runs = {(k if k.startswith("demflow") or len(v) == 1 else f"{k} ({len(v)} runs)"): v for k, v in runs.items()}
     for row, wall in enumerate(("plate", "floor")):
         for col, scale in enumerate(("linear", "log")):
             a = axs[row, col]
-            for name, u in runs.items():
-                f = np.concatenate([pooled_f(v, wall) for v in band.values()]) if u is None else pooled_f(u, wall)
+            for name, us in runs.items():
+                f = np.concatenate([pooled_f(v, wall) for v in us])
                 if f.size < 3:  # the q-model fit needs three forces
                     continue
                 edges = np.linspace(0, max(4.0, f.max()), 17) if scale == "linear" else np.logspace(-2, 1, 16)
@@ -1212,7 +1386,7 @@ def engine_figures(ex, outdir) -> list:
                 dens = h / (f.size * np.diff(e_))
                 mid = 0.5 * (e_[1:] + e_[:-1]) if scale == "linear" else np.sqrt(e_[1:] * e_[:-1])
                 N = fit_q_model(f).N
-                colour = "k" if u is None else ENGINE_COLOURS.get(engine_of(name), "k")
+                colour = "k" if name.startswith("demflow") else ENGINE_COLOURS.get(engine_of(name), "k")
                 keep = dens > 0 if scale == "log" else np.ones(dens.size, bool)  # empty bins off the log axes
                 a.plot(mid[keep], dens[keep], "o-", color=colour, ms=3, lw=0.8, label=f"{name} (q-model N = {N:.2g})")
                 x = np.linspace(0.01, 4, 200) if scale == "linear" else np.logspace(-2, 1, 200)
@@ -1226,7 +1400,7 @@ def engine_figures(ex, outdir) -> list:
             a.set_xlabel(f"f = F/<F> on the {wall}, per particle")
             a.set_ylabel("P(f)")
             a.legend(fontsize=7)
-    fig.suptitle("per-particle force PDFs at 400-600 kPa (dashed: each run's q-model fit)")
+    fig.suptitle("per-particle force PDFs at 400-600 kPa, each code's runs pooled (dashed: its q-model fit)")
     paths.append(save_figure(fig, f"{outdir}/engines_force_pdfs.png"))
     paths.append(engine_force_maps(ex, outdir))
     return paths
@@ -1234,14 +1408,16 @@ def engine_figures(ex, outdir) -> list:
 
 def engine_force_maps(ex, outdir) -> str:
     """Miyata Fig. 34 for every engine side by side: the plate and floor force maps of the first snapshot
-    (400 kPa) of demflow's first seed and of each stored engine run; each particle at the point where it
+    (400 kPa) of demflow's first seed and of each engine's run of that seed; each particle at the point where it
     touches the wall (:func:`wall_contact_points`), disc area ∝ its force on one scale per wall."""
     import matplotlib.pyplot as plt
 
     from ..plotting import save_figure
 
     first = next(iter(ex["band"]))
-    runs = {f"demflow seed{first}": ex["band"][first], **ex["engines"]}
+    # demflow's first seed and each engine's run of the same seed (one map per engine: the others are more draws)
+    runs = {f"demflow seed{first}": ex["band"][first],
+            **{e: u for e, u in ex["engines"].items() if " " not in e or e.endswith(f" seed{first}")}}
     L = float(np.sqrt(ex["area"]))
     fig, axs = plt.subplots(2, len(runs), figsize=(3.6 * len(runs), 7.4), squeeze=False)
     for row, wall in enumerate(("plate", "floor")):

@@ -171,7 +171,7 @@ def _sort_small(v, a, b):
         v[q + 1] = t
 
 
-@njit_parallel
+@njit
 def pairs_cell_search(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
     """All pairs with surface gap < skin, by cell search.
 
@@ -179,10 +179,18 @@ def pairs_cell_search(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
     endpoints A and B (arrays, one entry per wall).  Returns (finder, other) int64 arrays
     sorted by key; other >= n_discs denotes wall other - n_discs.
     """
+    finder, other, _ = pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by)
+    return finder, other
+
+
+@njit_parallel
+def pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
+    """:func:`pairs_cell_search`'s (finder, other) and the discs in its cell order (:func:`spatial_order` of
+    the same arguments, from the grid the search built: one grid per neighbour-list build)."""
     n = x.shape[0]
     empty = np.empty(0, np.int64)
     if n == 0:
-        return empty.copy(), empty.copy()
+        return empty.copy(), empty.copy(), empty.copy()
     xmin, ymin, h, nx, ny, cell, start, order = _grid(x, y, r, skin)
     xs, ys, rs = _cell_sorted(x, y, r, order)
     # one scan per disc into a fixed-size scratch row (K partners); discs with more
@@ -212,7 +220,7 @@ def pairs_cell_search(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
         _sort_small(other, a, b)
         for k in range(a, b):
             finder[k] = i
-    return finder, other
+    return finder, other, order
 
 
 @njit

@@ -132,14 +132,16 @@ def _primitive(pl):
     return "xyz"[a] + "plane", float(pl["point"][a])
 
 
-def read_benchmark_output(outdir: Path) -> dict:
+def read_benchmark_output(outdir: Path, run: int = -1) -> dict:
     """The benchmark deck's summary from log.liggghts: steps, kinetic energy and touching sphere-sphere
-    contacts (compute contact/atom counts each contact once per atom: half its sum) after the run."""
+    contacts (compute contact/atom counts each contact once per atom: half its sum) at the end of a run
+    command: ``run`` = -1 the last (the deck's one run), 0 the first (a deck the speed benchmark split into
+    ``run S`` and ``run S pre no``: the state at step S)."""
     log = Path(outdir) / "log.liggghts"
     text = log.read_text(errors="replace") if log.exists() else ""
     if "DEMFLOW-COMPLETE" not in text:
         raise EngineOutputError(f"LIGGGHTS did not complete (no completion mark in {log}); rerun the engine")
-    last, header = None, None
+    ends, last, header = [], None, None  # ends: the last thermo line of each run ("Loop time" closes a run)
     for line in text.splitlines():
         w = line.split()
         if w[:2] == ["Step", "Atoms"]:
@@ -150,10 +152,19 @@ def read_benchmark_output(outdir: Path) -> dict:
             except ValueError:
                 header = None
         else:
-            header = None if line.startswith("Loop time") else header
-    if last is None:
+            if line.startswith("Loop time"):
+                header = None
+                if last is not None:
+                    ends.append(last)
+    if last is not None and (not ends or ends[-1] is not last):
+        ends.append(last)
+    if not ends:
         raise EngineOutputError(f"no thermo output in {log}")
-    return BenchmarkSummary(steps=int(last["Step"]), kinetic=last["KinEng"], sphere_contacts=0.5 * last["csum"])
+    if not -len(ends) <= run < len(ends):
+        raise EngineOutputError(f"run={run} asked of {log}, which holds {len(ends)} run(s); give run=0 for the first "
+                                "or -1 for the last")
+    end = ends[run]
+    return BenchmarkSummary(steps=int(end["Step"]), kinetic=end["KinEng"], sphere_contacts=0.5 * end["csum"])
 
 
 class Liggghts3DEngine(LiggghtsEngine):
