@@ -211,6 +211,39 @@ def test_leave_one_out_counts_how_often_a_fair_draw_misses_the_band():
     assert leave_one_out_misses(per_seed) == (9, 1, 1)
 
 
+def test_one_band_rule_judges_engine_runs_demflows_seeds_and_the_per_run_lines():
+    """A stress never reached (nan) misses the band wherever a run is judged: in judge_value, in a run's miss
+    (run_has_miss), in demflow's own leave-one-out count and on an engine's counted line; a statistic that too few
+    seeds reach has no band and is judged nowhere (an informative line, not a counted miss)."""
+    import math
+
+    from demflow.cases.base import CaseRun
+    from demflow.cases.miyata_uniaxial3d import judge_value, leave_one_out_misses, run_has_miss, seed_band
+
+    vals = [1.0, 1.01, 1.02, 1.03, 1.04, 1.05, 1.06, 1.07]
+    assert judge_value(math.nan, vals) is False and judge_value(1.03, vals) is True
+    assert judge_value(1.03, [1.0, math.nan, math.nan]) is None and seed_band([1.0, math.nan]).wide
+    per_seed = {k: {"narrow": v, "rare": math.nan if k else 1.0} for k, v in enumerate(vals)}
+    per_seed[8] = {"narrow": math.nan, "rare": math.nan}
+    assert run_has_miss(per_seed[8], {q: v for q, v in per_seed.items() if q != 8})
+    # seed 8's nan is outside the other eight's band; "rare" has no band for any seed (at most one finite value)
+    assert leave_one_out_misses(per_seed) == (9, 1, 1)
+
+    case = get_case("miyata-uniaxial-3d")
+    p = case.merged()
+    band = {s: _synthetic(s) for s in range(1, 9)}
+    never = _synthetic(99)
+    never.curve["plate_stress"] = np.minimum(never.curve["plate_stress"], 450e3)  # never reaches 500 and 600 kPa
+    checks = case._cross_code_checks(CaseRun({}, {"band": band, "engines": {"yade": never}}), p)
+    miss = next(c for c in checks if c.name.startswith("yade: plate height at 600 kPa"))
+    assert miss.kind == "cross-code" and not miss.passed
+    for s in band.values():  # no seed reaches 600 kPa: no band, a line shown and not counted
+        s.curve["plate_stress"] = np.minimum(s.curve["plate_stress"], 550e3)
+    checks = case._cross_code_checks(CaseRun({}, {"band": band, "engines": {"yade": never}}), p)
+    shown = next(c for c in checks if c.name.startswith("yade: plate height at 600 kPa"))
+    assert shown.informative and "no band" in shown.name
+
+
 def test_an_engine_with_eight_runs_is_judged_as_an_ensemble():
     """With >= 4 stored runs an engine's per-run lines are informative (one draw each) and its runs are judged
     together against demflow's seeds (tolerance miyata3d.engine-ensemble): draws of demflow's own distribution

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -471,25 +472,19 @@ def band_summary(band: dict):
 
 def leave_one_out_misses(per_seed: dict) -> tuple[int, int, int]:
     """(judged, outside, seeds with a miss): each seed's :func:`run_statistics` against the 95 % band of the other
-    seeds, judged by the engines' rule (a band wider than the informative limit only counts a value outside it)
-    — how often demflow itself would miss, per statistic and per run."""
+    seeds, by the rule engine runs are judged by (:func:`judge_value`: a non-finite value is outside, a value inside
+    a band too wide to judge is not judged) — how often demflow itself would miss, per statistic and per run."""
     keys = list(next(iter(per_seed.values())))
     judged = outside = 0
     missed = set()
     for s, st in per_seed.items():
         for k in keys:
-            vals = [v[k] for q, v in per_seed.items() if q != s]
-            lo, hi = band_of(vals)
-            finite = [x for x in vals if math.isfinite(x)]
-            if not (finite and math.isfinite(lo) and math.isfinite(st[k])):
+            verdict = judge_value(st[k], [v[k] for q, v in per_seed.items() if q != s])
+            if verdict is None:
                 continue
-            mean = float(np.mean(finite))
-            inside = lo <= st[k] <= hi
-            if inside and not (0.5 * (hi - lo) <= BAND_INFORMATIVE * abs(mean)):
-                continue  # a pass of a too-wide band is not judged
             judged += 1
-            outside += not inside
-            if not inside:
+            outside += not verdict
+            if not verdict:
                 missed.add(s)
     return judged, outside, len(missed)
 
@@ -503,18 +498,34 @@ def _vs_level(p: float) -> str:
     return f"{'≥' if p >= ENSEMBLE_ALPHA else '<'} {ENSEMBLE_ALPHA:g}"
 
 
-def judge_value(v: float, vals) -> bool | None:
-    """One run's statistic ``v`` against the 95 % band of the seeds' ``vals`` by the rule engine runs are judged
-    by: False outside (a non-finite value, e.g. a stress never reached, is outside), True inside, None when it
-    cannot be judged (no band, or inside a band wider than :data:`BAND_INFORMATIVE` of its mean)."""
+class SeedBand(NamedTuple):
+    """The 95 % band of demflow's seeds one statistic is judged against: ``lo``, ``hi`` (nan without one: fewer
+    than 3 finite seeds), the seeds' finite ``mean``, and ``wide``: no band, or one wider than
+    :data:`BAND_INFORMATIVE` of its mean (too wide for a value inside it to count as a pass)."""
+    lo: float
+    hi: float
+    mean: float
+    wide: bool
+
+
+def seed_band(vals) -> SeedBand:
+    """The :class:`SeedBand` of the seeds' values ``vals`` of one statistic (non-finite ones left out)."""
     lo, hi = band_of(vals)
     finite = [x for x in vals if math.isfinite(x)]
-    if not (finite and math.isfinite(lo)):
+    mean = float(np.mean(finite)) if finite else math.nan
+    return SeedBand(lo, hi, mean, not (math.isfinite(lo) and 0.5 * (hi - lo) <= BAND_INFORMATIVE * abs(mean)))
+
+
+def judge_value(v: float, vals) -> bool | None:
+    """One run's statistic ``v`` against the 95 % band of the seeds' ``vals``: the one rule engine runs, demflow's
+    own seeds (:func:`leave_one_out_misses`) and the page's per-run lines are judged by.  False outside (a
+    non-finite value, e.g. a stress never reached, is outside), True inside, None when it cannot be judged (no
+    band, or inside a band wider than :data:`BAND_INFORMATIVE` of its mean: a value outside even it is a miss)."""
+    b = seed_band(vals)
+    if not math.isfinite(b.lo):
         return None
-    inside = bool(lo <= v <= hi)
-    if inside and not (0.5 * (hi - lo) <= BAND_INFORMATIVE * abs(float(np.mean(finite)))):
-        return None
-    return inside
+    inside = bool(b.lo <= v <= b.hi)
+    return None if inside and b.wide else inside
 
 
 def run_has_miss(st: dict, per_seed: dict) -> bool:
@@ -921,6 +932,7 @@ class MiyataUniaxial3D(Case):
                 continue
             matched = engine_band(ex, e)
             ensemble = len(runs) >= ENSEMBLE_MIN_RUNS
+            st = {label: run_statistics(u) for label, u in runs.items()}
             one_draw = (f"Not counted: one of {e}'s {len(runs)} runs, each one draw of a chaotic bed; a fair draw misses "
                         "a 95 % band about as often as demflow's own seeds do (the leave-one-out line), so the runs are "
                         f"judged together: the '{e} runs as an ensemble' lines (tolerance miyata3d.engine-ensemble).")
@@ -928,12 +940,12 @@ class MiyataUniaxial3D(Case):
                 for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
                     if len(band) < 3 or (ensemble and band is not matched):
                         continue  # an ensemble meets the other band once, below
-                    out += self._band_checks(label, u, summaries[id(band)], name, band is matched and not ensemble,
-                                             one_draw if band is matched else None)
+                    out += self._band_checks(label, u, st[label], summaries[id(band)], name,
+                                             band is matched and not ensemble, one_draw if band is matched else None)
             if ensemble:
                 for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
                     if len(band) >= 3:
-                        out += self._ensemble_checks(e, runs, summaries[id(band)], name, band is matched)
+                        out += self._ensemble_checks(e, runs, st, summaries[id(band)], name, band is matched)
         if any(len([1 for label in ex["engines"] if engine_of(label) == e]) >= ENSEMBLE_MIN_RUNS for e in self.engines):
             out.append(ensemble_negative_control(summaries[id(ex["band"])][0]))
         for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
@@ -951,16 +963,15 @@ class MiyataUniaxial3D(Case):
         return out
 
     @staticmethod
-    def _band_checks(e, u, summary, name, counted, not_counted=None) -> list:
-        """``u``'s statistics and plate-force KS distance against demflow's seed band (its :func:`band_summary`);
-        counted only when the band has the engine's physics and the engine is not judged as an ensemble
-        (``counted``; else informative, with the reason ``not_counted``, by default what the model difference
-        does)."""
+    def _band_checks(e, u, st, summary, name, counted, not_counted=None) -> list:
+        """``u``'s statistics ``st`` (its :func:`run_statistics`) and plate-force KS distance against demflow's seed
+        band (its :func:`band_summary`), each by :func:`judge_value`; counted only when the band has the engine's
+        physics and the engine is not judged as an ensemble (``counted``; else informative, with the reason
+        ``not_counted``, by default what the model difference does)."""
         from scipy import stats
 
         per_seed, (ds, d_hi), pooled = summary
         keys = list(next(iter(per_seed.values())))
-        st = run_statistics(u)
         label = f"demflow's seed band{name}"
         differs = ("Not counted: this engine cannot express demflow's local damping (capabilities row "
                    "local-damping-uniaxial), so it is judged against the band without it; this line shows what "
@@ -968,24 +979,26 @@ class MiyataUniaxial3D(Case):
         out = []
         for k in keys:
             vals = [v[k] for v in per_seed.values()]
-            lo, hi = band_of(vals)
+            b = seed_band(vals)
             v = st[k]
-            mean = float(np.nanmean([x for x in vals if math.isfinite(x)])) if any(map(math.isfinite, vals)) else math.nan
-            inside = bool(lo <= v <= hi)
-            # a band too wide to judge cannot give a pass, but a value outside even it is a counted miss
-            if inside and not (0.5 * (hi - lo) <= BAND_INFORMATIVE * abs(mean)):
-                out.append(Check.info(f"{e}: {k} = {v:.4g} inside {label} [{lo:.4g}, {hi:.4g}], too wide to judge", v,
-                                      SRC, f"Not counted as a pass: the band's half-width is {0.5 * (hi - lo) / abs(mean):.0%} of its "
+            verdict = judge_value(v, vals)
+            if verdict is None and not math.isfinite(b.lo):
+                out.append(Check.info(f"{e}: {k} = {v:.4g}, no band of {label} (fewer than 3 finite seeds)", v, SRC,
+                                      "Not judged: too few demflow seeds reach this statistic to give a band."))
+            elif verdict is None:
+                # a band too wide to judge cannot give a pass, but a value outside even it is a counted miss
+                out.append(Check.info(f"{e}: {k} = {v:.4g} inside {label} [{b.lo:.4g}, {b.hi:.4g}], too wide to judge", v,
+                                      SRC, f"Not counted as a pass: the band's half-width is {0.5 * (b.hi - b.lo) / abs(b.mean):.0%} of its "
                                       f"mean (> {BAND_INFORMATIVE:.0%}). In the 2 × 2 m box a few particles carry the "
                                       "plate (see 'particles on the plate'), so this statistic varies from seed to seed more than any engine "
                                       "difference could show; the full variant's larger box is needed.",
-                                      reference=mean))
+                                      reference=b.mean))
             elif not counted:
-                out.append(Check.info(f"{e}: {k} = {v:.4g} {'inside' if inside else 'OUTSIDE'} {label} "
-                                      f"[{lo:.4g}, {hi:.4g}]", v, SRC, differs, reference=mean))
+                out.append(Check.info(f"{e}: {k} = {v:.4g} {'inside' if verdict else 'OUTSIDE'} {label} "
+                                      f"[{b.lo:.4g}, {b.hi:.4g}]", v, SRC, differs, reference=b.mean))
             else:
-                out.append(Check.condition(f"{e}: {k} = {v:.4g} inside {label} [{lo:.4g}, {hi:.4g}] ({len(per_seed)} seeds)",
-                                           inside, v, SRC,
+                out.append(Check.condition(f"{e}: {k} = {v:.4g} inside {label} [{b.lo:.4g}, {b.hi:.4g}] ({len(per_seed)} seeds)",
+                                           verdict, v, SRC,
                                            "Acceptance of issue 14: the beds differ between engines (chaos, and "
                                            "LIGGGHTS inserts its own bed), so each engine's statistic is judged "
                                            "against the 95 % prediction band of demflow's seeds with the engine's "
@@ -1003,11 +1016,12 @@ class MiyataUniaxial3D(Case):
             out.append(Check.info(what, d, SRC, differs))
         return out
 
-    @classmethod
-    def _ensemble_checks(cls, e, runs, summary, name, counted=True) -> list:
+    @staticmethod
+    def _ensemble_checks(e, runs, st, summary, name, counted=True) -> list:
         """An engine's runs judged together against demflow's seeds with the engine's physics (issue 14 item 4,
-        once the engine has :data:`ENSEMBLE_MIN_RUNS` runs): each statistic's mean by Welch's two-sided test with
-        Holm's adjustment over the statistics; the share of runs missing the band against demflow's own
+        once the engine has :data:`ENSEMBLE_MIN_RUNS` runs; ``st`` their :func:`run_statistics` by label): each
+        statistic's mean by Welch's two-sided test with Holm's adjustment over the statistics; the share of runs
+        missing the band against demflow's own
         leave-one-out share (one-sided Fisher exact); the plate forces' KS distances from demflow's pooled seeds
         against each seed's from the others (one-sided Welch).  Each at the level of tolerance
         miyata3d.engine-ensemble.  A statistic whose band is too wide to judge (:data:`BAND_INFORMATIVE`) is
@@ -1015,14 +1029,16 @@ class MiyataUniaxial3D(Case):
         (``counted`` False) every line is informative: what the model difference does."""
         from scipy import stats
 
-        if not counted:
-            return [Check.info(c.name, c.value, SRC, "Not counted: this band lacks the engine's physics (capabilities "
-                               "row local-damping-uniaxial: LIGGGHTS has no local damping, YADE has it); this line shows "
-                               "what the model difference does.")
-                    for c in cls._ensemble_checks(e, runs, summary, name, True)]
+        other_band = ("Not counted: this band lacks the engine's physics (capabilities row local-damping-uniaxial: "
+                      "LIGGGHTS has no local damping, YADE has it); this line shows what the model difference does.")
+
+        def info(what, value, why):
+            return Check.info(what, value, SRC, why if counted else other_band)
+
+        def judged(what, ok, value, why):
+            return Check.condition(what, ok, value, SRC, why, kind="cross-code") if counted else info(what, value, why)
 
         per_seed, (ds, _), pooled = summary
-        st = {label: run_statistics(u) for label, u in runs.items()}
         rows = ensemble_comparison(per_seed, st)
         label = f"demflow's {len(per_seed)} seeds{name}"
         head = f"{e} runs as an ensemble ({len(runs)} runs) vs {label}"
@@ -1037,38 +1053,34 @@ class MiyataUniaxial3D(Case):
             what = (f"{head}: {k}, mean {r['mean']:.4g} (s.d. {r['sd']:.3g}, {r['n']} runs) vs {r['demflow mean']:.4g} "
                     f"(s.d. {r['demflow sd']:.3g}, {r['demflow n']} seeds): Welch p = {r['welch p']:.3g}, Holm-adjusted "
                     f"{ph:.3g}")
-            vals = [v[k] for v in per_seed.values()]
-            lo, hi = band_of(vals)
-            wide = not (math.isfinite(lo) and 0.5 * (hi - lo) <= BAND_INFORMATIVE * abs(r["demflow mean"]))
             if not math.isfinite(ph):
-                out.append(Check.info(f"{what} (no test: fewer than two finite values on a side)", math.nan, SRC, why))
-            elif wide and ph >= ENSEMBLE_ALPHA:
-                out.append(Check.info(f"{what} ≥ {ENSEMBLE_ALPHA:g}, band too wide to judge", ph, SRC,
-                                      "Not counted as a pass: demflow's band of this statistic is wider than "
-                                      f"{BAND_INFORMATIVE:.0%} of its mean (the per-run rule), so agreement here says "
-                                      "little; a difference found would still count."))
+                out.append(info(f"{what} (no test: fewer than two finite values on a side)", math.nan, why))
+            elif seed_band([v[k] for v in per_seed.values()]).wide and ph >= ENSEMBLE_ALPHA:
+                out.append(info(f"{what} ≥ {ENSEMBLE_ALPHA:g}, band too wide to judge", ph,
+                                "Not counted as a pass: demflow's band of this statistic is wider than "
+                                f"{BAND_INFORMATIVE:.0%} of its mean (the per-run rule), so agreement here says "
+                                "little; a difference found would still count."))
             else:
-                out.append(Check.condition(f"{what} {_vs_level(ph)}", ph >= ENSEMBLE_ALPHA, ph, SRC, why,
-                                           kind="cross-code"))
+                out.append(judged(f"{what} {_vs_level(ph)}", ph >= ENSEMBLE_ALPHA, ph, why))
         e_miss = sum(run_has_miss(v, per_seed) for v in st.values())
         d_miss = sum(run_has_miss(per_seed[s], {q: v for q, v in per_seed.items() if q != s}) for s in per_seed)
         p = miss_rate_test(e_miss, len(st), d_miss, len(per_seed))
-        out.append(Check.condition(
+        out.append(judged(
             f"{head}: runs with a statistic outside the band {e_miss} of {len(st)}, demflow's seeds against the band of "
             f"the others {d_miss} of {len(per_seed)}: one-sided Fisher p = {p:.3g} {_vs_level(p)}",
-            p >= ENSEMBLE_ALPHA, p, SRC,
+            p >= ENSEMBLE_ALPHA, p,
             "Whether the engine's runs miss demflow's band more often than demflow's own seeds do, by the per-run rule "
             "(a run misses when any judged statistic lies outside). Fails: the engine's beds fall outside more often "
-            "than a fair draw of demflow's.", kind="cross-code"))
+            "than a fair draw of demflow's."))
         de = np.asarray([stats.ks_2samp(pooled_f(u), pooled).statistic for u in runs.values() if pooled_f(u).size])
         if de.size >= 2 and len(ds) >= 2:
             p = float(stats.ttest_ind(de, ds, equal_var=False, alternative="greater").pvalue)
-            out.append(Check.condition(
+            out.append(judged(
                 f"{head}: KS distance of each run's plate f = F/<F> from demflow's pooled seeds, mean {de.mean():.3g} "
                 f"({de.size} runs) vs each seed's from the others {np.mean(ds):.3g}: one-sided Welch p = {p:.3g} "
-                f"{_vs_level(p)}", p >= ENSEMBLE_ALPHA, p, SRC,
+                f"{_vs_level(p)}", p >= ENSEMBLE_ALPHA, p,
                 "Whether the engine's plate-force distributions lie farther from demflow's than one demflow seed's "
-                "lies from the others'.", kind="cross-code"))
+                "lies from the others'."))
         return out
 
     def observables(self, run, p):
