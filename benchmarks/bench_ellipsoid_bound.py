@@ -55,20 +55,17 @@ def _solves(idx, pos, rot, axes, shift, pi, pj, lam, reps, points):
             j = pj[k]
             for a in range(3):
                 cj[a] = pos[j, a] + shift[k, a]
-            _potential_problem(pos[i], rot[i], axes[i], cj, rot[j], axes[j], H, g, M)
-            if points:
-                li, it = potential_point(H, g, lam[k, 0], True, work[0], work[1], work[2], work[5])
-                acc += li
-                fact += it
-            else:
-                acc += H[0, 0] + g[1]
-            _potential_problem(cj, rot[j], axes[j], pos[i], rot[i], axes[i], H, g, M)
-            if points:
-                lj, it = potential_point(H, g, lam[k, 1], True, work[4], work[1], work[2], work[5])
-                acc += lj
-                fact += it
-            else:
-                acc += H[0, 0] + g[1]
+            for side in range(2):  # the point of i's surface, then j's (as ellipsoid_pair)
+                if side == 0:
+                    _potential_problem(pos[i], rot[i], axes[i], cj, rot[j], axes[j], H, g, M)
+                else:
+                    _potential_problem(cj, rot[j], axes[j], pos[i], rot[i], axes[i], H, g, M)
+                if points:
+                    lam_k, it = potential_point(H, g, lam[k, side], True, work[side * 4], work[1], work[2], work[5])
+                    acc += lam_k
+                    fact += it
+                else:
+                    acc += H[0, 0] + g[1]
     return acc, fact
 
 
