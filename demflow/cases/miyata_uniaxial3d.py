@@ -454,20 +454,35 @@ def ks_band(band: dict, wall: str = "plate") -> tuple[np.ndarray, float]:
     upper end of their 95 % prediction band: how far one more seed's distribution falls from the rest."""
     from scipy import stats
 
-    seeds = list(band)
-    d = []
-    for s in seeds:
-        rest = np.concatenate([pooled_f(band[q], wall) for q in seeds if q != s])
-        d.append(stats.ks_2samp(pooled_f(band[s], wall), rest).statistic)
+    f = {s: pooled_f(u, wall) for s, u in band.items()}
+    d = [stats.ks_2samp(f[s], np.concatenate([g for q, g in f.items() if q != s])).statistic for s in f]
     return np.asarray(d), band_of(d)[1]
 
 
 
-def band_summary(band: dict):
-    """What every engine run is judged against, computed once per band: each seed's :func:`run_statistics`,
-    the KS distances of :func:`ks_band`, and the seeds' pooled plate forces."""
-    return ({s: run_statistics(v) for s, v in band.items()}, ks_band(band),
-            np.concatenate([pooled_f(v) for v in band.values()]))
+class BandSummary(NamedTuple):
+    """What every engine run is judged against, computed once per band (:func:`band_summary`): each seed's
+    :func:`run_statistics` (``per_seed``), the KS distances of :func:`ks_band` (``ks_seeds``, ``ks_hi``), and the
+    seeds' pooled plate forces (``pooled``)."""
+    per_seed: dict
+    ks_seeds: np.ndarray
+    ks_hi: float
+    pooled: np.ndarray
+
+
+def band_summary(band: dict) -> BandSummary:
+    """The :class:`BandSummary` of demflow's seed ``band`` ({seed: run})."""
+    ks_seeds, ks_hi = ks_band(band)
+    return BandSummary({s: run_statistics(v) for s, v in band.items()}, ks_seeds, ks_hi,
+                       np.concatenate([pooled_f(v) for v in band.values()]))
+
+
+def ks_from_pooled(f: np.ndarray, pooled: np.ndarray) -> float:
+    """The KS distance of one run's pooled plate forces ``f`` (:func:`pooled_f`) from demflow's pooled seeds
+    (nan for a run without plate forces)."""
+    from scipy import stats
+
+    return float(stats.ks_2samp(f, pooled).statistic) if f.size else math.nan
 
 
 def leave_one_out_misses(per_seed: dict) -> tuple[int, int, int]:
@@ -521,7 +536,11 @@ def judge_value(v: float, vals) -> bool | None:
     own seeds (:func:`leave_one_out_misses`) and the page's per-run lines are judged by.  False outside (a
     non-finite value, e.g. a stress never reached, is outside), True inside, None when it cannot be judged (no
     band, or inside a band wider than :data:`BAND_INFORMATIVE` of its mean: a value outside even it is a miss)."""
-    b = seed_band(vals)
+    return judge(v, seed_band(vals))
+
+
+def judge(v: float, b: SeedBand) -> bool | None:
+    """:func:`judge_value` against a band ``b`` already formed (:func:`seed_band`)."""
     if not math.isfinite(b.lo):
         return None
     inside = bool(b.lo <= v <= b.hi)
@@ -933,6 +952,8 @@ class MiyataUniaxial3D(Case):
             matched = engine_band(ex, e)
             ensemble = len(runs) >= ENSEMBLE_MIN_RUNS
             st = {label: run_statistics(u) for label, u in runs.items()}
+            fe = {label: pooled_f(u) for label, u in runs.items()}
+            ks = {i: {label: ks_from_pooled(f, b.pooled) for label, f in fe.items()} for i, b in summaries.items()}
             one_draw = (f"Not counted: one of {e}'s {len(runs)} runs, each one draw of a chaotic bed; a fair draw misses "
                         "a 95 % band about as often as demflow's own seeds do (the leave-one-out line), so the runs are "
                         f"judged together: the '{e} runs as an ensemble' lines (tolerance miyata3d.engine-ensemble).")
@@ -940,17 +961,17 @@ class MiyataUniaxial3D(Case):
                 for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
                     if len(band) < 3 or (ensemble and band is not matched):
                         continue  # an ensemble meets the other band once, below
-                    out += self._band_checks(label, u, st[label], summaries[id(band)], name,
+                    out += self._band_checks(label, st[label], ks[id(band)][label], summaries[id(band)], name,
                                              band is matched and not ensemble, one_draw if band is matched else None)
             if ensemble:
                 for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
                     if len(band) >= 3:
-                        out += self._ensemble_checks(e, runs, st, summaries[id(band)], name, band is matched)
+                        out += self._ensemble_checks(e, st, ks[id(band)], summaries[id(band)], name, band is matched)
         if any(len([1 for label in ex["engines"] if engine_of(label) == e]) >= ENSEMBLE_MIN_RUNS for e in self.engines):
-            out.append(ensemble_negative_control(summaries[id(ex["band"])][0]))
+            out.append(ensemble_negative_control(summaries[id(ex["band"])].per_seed))
         for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
             if len(band) >= 4:
-                judged, outside, seeds = leave_one_out_misses(summaries[id(band)][0])
+                judged, outside, seeds = leave_one_out_misses(summaries[id(band)].per_seed)
                 out.append(Check.info(
                     f"demflow's own seeds judged like an engine run, each against the band of the other "
                     f"{len(band) - 1}{name}: {outside} of {judged} judged statistics outside, {seeds} of {len(band)} "
@@ -963,14 +984,13 @@ class MiyataUniaxial3D(Case):
         return out
 
     @staticmethod
-    def _band_checks(e, u, st, summary, name, counted, not_counted=None) -> list:
-        """``u``'s statistics ``st`` (its :func:`run_statistics`) and plate-force KS distance against demflow's seed
-        band (its :func:`band_summary`), each by :func:`judge_value`; counted only when the band has the engine's
-        physics and the engine is not judged as an ensemble (``counted``; else informative, with the reason
-        ``not_counted``, by default what the model difference does)."""
-        from scipy import stats
-
-        per_seed, (ds, d_hi), pooled = summary
+    def _band_checks(e, st, d, summary, name, counted, not_counted=None) -> list:
+        """Run ``e``'s statistics ``st`` (its :func:`run_statistics`) and plate-force KS distance ``d``
+        (:func:`ks_from_pooled`) against demflow's seed band (its :class:`BandSummary`), each by :func:`judge`;
+        counted only when the band has the engine's physics and the engine is not judged as an ensemble
+        (``counted``; else informative, with the reason ``not_counted``, by default what the model difference
+        does)."""
+        per_seed, ds, d_hi = summary.per_seed, summary.ks_seeds, summary.ks_hi
         keys = list(next(iter(per_seed.values())))
         label = f"demflow's seed band{name}"
         differs = ("Not counted: this engine cannot express demflow's local damping (capabilities row "
@@ -981,7 +1001,7 @@ class MiyataUniaxial3D(Case):
             vals = [v[k] for v in per_seed.values()]
             b = seed_band(vals)
             v = st[k]
-            verdict = judge_value(v, vals)
+            verdict = judge(v, b)
             if verdict is None and not math.isfinite(b.lo):
                 out.append(Check.info(f"{e}: {k} = {v:.4g}, no band of {label} (fewer than 3 finite seeds)", v, SRC,
                                       "Not judged: too few demflow seeds reach this statistic to give a band."))
@@ -1003,8 +1023,6 @@ class MiyataUniaxial3D(Case):
                                            "LIGGGHTS inserts its own bed), so each engine's statistic is judged "
                                            "against the 95 % prediction band of demflow's seeds with the engine's "
                                            "physics.", kind="cross-code"))
-        fe = pooled_f(u)
-        d = float(stats.ks_2samp(fe, pooled).statistic) if fe.size else math.nan
         what = (f"{e}: KS distance of the plate's f = F/<F> from {label} pooled = {d:.3g} "
                 f"{'≤' if d <= d_hi else '>'} the seeds' own band {d_hi:.3g} (each seed vs the others: "
                 f"{', '.join(f'{x:.3g}' for x in ds)})")
@@ -1017,9 +1035,10 @@ class MiyataUniaxial3D(Case):
         return out
 
     @staticmethod
-    def _ensemble_checks(e, runs, st, summary, name, counted=True) -> list:
+    def _ensemble_checks(e, st, ks, summary, name, counted=True) -> list:
         """An engine's runs judged together against demflow's seeds with the engine's physics (issue 14 item 4,
-        once the engine has :data:`ENSEMBLE_MIN_RUNS` runs; ``st`` their :func:`run_statistics` by label): each
+        once the engine has :data:`ENSEMBLE_MIN_RUNS` runs; ``st`` their :func:`run_statistics` and ``ks`` their
+        plate forces' KS distances from the band's pooled seeds (:func:`ks_from_pooled`), by label): each
         statistic's mean by Welch's two-sided test with Holm's adjustment over the statistics; the share of runs
         missing the band against demflow's own
         leave-one-out share (one-sided Fisher exact); the plate forces' KS distances from demflow's pooled seeds
@@ -1038,10 +1057,10 @@ class MiyataUniaxial3D(Case):
         def judged(what, ok, value, why):
             return Check.condition(what, ok, value, SRC, why, kind="cross-code") if counted else info(what, value, why)
 
-        per_seed, (ds, _), pooled = summary
+        per_seed, ds = summary.per_seed, summary.ks_seeds
         rows = ensemble_comparison(per_seed, st)
         label = f"demflow's {len(per_seed)} seeds{name}"
-        head = f"{e} runs as an ensemble ({len(runs)} runs) vs {label}"
+        head = f"{e} runs as an ensemble ({len(st)} runs) vs {label}"
         why = ("Acceptance of issue 14 item 4 with several runs per engine: the beds differ between engines (chaos, and "
                "LIGGGHTS inserts its own bed), so the engine's runs and demflow's seeds are two samples of the "
                "protocol's beds; a difference of means is found by Welch's two-sided test (the K-sweep's rule), "
@@ -1072,7 +1091,7 @@ class MiyataUniaxial3D(Case):
             "Whether the engine's runs miss demflow's band more often than demflow's own seeds do, by the per-run rule "
             "(a run misses when any judged statistic lies outside). Fails: the engine's beds fall outside more often "
             "than a fair draw of demflow's."))
-        de = np.asarray([stats.ks_2samp(pooled_f(u), pooled).statistic for u in runs.values() if pooled_f(u).size])
+        de = np.asarray([d for d in ks.values() if math.isfinite(d)])
         if de.size >= 2 and len(ds) >= 2:
             p = float(stats.ttest_ind(de, ds, equal_var=False, alternative="greater").pvalue)
             out.append(judged(
