@@ -3,7 +3,7 @@ bed's speed per particle-step ≥ that of the 12-sphere clump bed, measured in o
 
     python benchmarks/bench_ellipsoid_vs_clumps.py [--settle 120000] [--steps 2000] [--rounds 3] [--K 8 12]
 
-Each bed is the miyata-uniaxial-3d protocol's first stage (demflow/cases/miyata_uniaxial3d.py: 80 of the seed's
+Each bed is the miyata-uniaxial-3d protocol's first stage (demflow/cases/miyata_uniaxial3d_protocol.py: 80 of the seed's
 191 kg particles inserted on a loose lattice in a 2 x 2 m periodic box, settling under gravity with local damping
 0.3, the same seed and orientations), as true ellipsoids (shape "ellipsoids") and as K-sphere clumps of the
 ellipsoid; each is settled for ``--settle`` steps (untimed), then ``--rounds`` rounds of ``--steps`` steps are
@@ -29,7 +29,7 @@ import numba  # noqa: E402
 
 import demflow as df  # noqa: E402
 from demflow.cases import get_case  # noqa: E402
-from demflow.cases.miyata_uniaxial3d import insertion_scene  # noqa: E402
+from demflow.cases.miyata_uniaxial3d_protocol import insertion_scene  # noqa: E402
 
 
 def bed(shape: str, K: int, settle: int):

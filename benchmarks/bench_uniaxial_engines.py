@@ -50,7 +50,7 @@ warnings.simplefilter("ignore")
 from demflow.jit import set_threads
 set_threads(1)
 from demflow.build import build
-from demflow.cases.miyata_uniaxial3d import insertion_scene, settle
+from demflow.cases.miyata_uniaxial3d_protocol import insertion_scene, settle
 import sys
 sys.path.insert(0, {str(Path(__file__).resolve().parent)!r})
 from bench_uniaxial_engines import params
@@ -71,7 +71,7 @@ print(json.dumps(dict(steps=abs(steps), wall_s=wall, clumps=len(sim.bodies.mass)
 
 def time_yade(S: int) -> dict:
     from demflow.build import build
-    from demflow.cases.miyata_uniaxial3d import insertion_scene
+    from demflow.cases.miyata_uniaxial3d_protocol import insertion_scene
     from demflow.engines.yade_uniaxial3d import YadeUniaxial3DEngine
 
     p = params(S)
@@ -84,7 +84,7 @@ def time_yade(S: int) -> dict:
 def time_liggghts(S: int) -> dict:
     from bench_engines import liggghts_loop_times
     from demflow.build import build
-    from demflow.cases.miyata_uniaxial3d import insertion_scene
+    from demflow.cases.miyata_uniaxial3d_protocol import insertion_scene
     from demflow.engines.liggghts_uniaxial3d import LiggghtsUniaxial3DEngine
 
     p = params(S)

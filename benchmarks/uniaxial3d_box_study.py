@@ -4,7 +4,7 @@ curve's monotone check fails.)
 
     python benchmarks/uniaxial3d_box_study.py --boxes 2 3 4 --seeds 1 2 3 [--shape clumps] [--out /tmp/box-study]
 
-Runs the case's whole protocol (:func:`demflow.cases.miyata_uniaxial3d.protocol_run`: insertion, settling, trim at
+Runs the case's whole protocol (:func:`demflow.cases.miyata_uniaxial3d_protocol.protocol_run`: insertion, settling, trim at
 2.0 m, loading at 2 cm/s to 600 kPa) for each box side and seed, one seed at a time on one core, with the number
 of inserted particles scaled with the box's area (the reduced variant's 80 per 4 m^2; every other parameter the
 case's).  Prints one row per run: particles kept, particles on the plate at 100 and 400 kPa, the case's own
@@ -27,7 +27,8 @@ import numpy as np
 import pandas as pd
 
 from demflow.cases import get_case
-from demflow.cases.miyata_uniaxial3d import monotone_steps, protocol_run, stress_falls
+from demflow.cases.miyata_uniaxial3d_statistics import monotone_steps, stress_falls
+from demflow.cases.miyata_uniaxial3d_protocol import protocol_run
 
 PER_M2 = 80 / 4.0  # the reduced variant's insertion density
 DEEP = 0.05  # a drop deeper than this fraction of the running maximum is counted

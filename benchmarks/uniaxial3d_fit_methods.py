@@ -20,7 +20,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from demflow.analysis.forces import fit_q_model
-from demflow.cases.miyata_uniaxial3d import pooled_f_snaps
+from demflow.cases.miyata_uniaxial3d_statistics import pooled_f_snaps
 
 BINS = (0.1, 0.2, 0.25, 0.5)
 CUTS = (0.1, 0.2, 0.3)  # leave out the forces below this fraction of <F>, renormalise, fit again

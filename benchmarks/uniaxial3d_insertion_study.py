@@ -11,9 +11,9 @@ inserts on a loose lattice.  On the page of 2026-11-27 LIGGGHTS seed 1's settlem
 mm) lies above that band (at most 200 and 260 mm).  The last documented difference is the shear spring (row
 shear-spring-uniaxial: LIGGGHTS stores the total tangential displacement).  This runs the case's whole protocol
 without local damping for the given seeds four times: with demflow's lattice or ``insertion="random"`` (the same
-region and placement rule as the LIGGGHTS deck, :func:`demflow.cases.miyata_uniaxial3d.random_insertion`), each
+region and placement rule as the LIGGGHTS deck, :func:`demflow.cases.miyata_uniaxial3d_protocol.random_insertion`), each
 with the incremental or the ``shear_spring="total"`` Mindlin spring; it prints each statistic's 95 % prediction
-band per arm (:func:`~demflow.cases.miyata_uniaxial3d.band_of`, the page's rule) beside the stored LIGGGHTS runs,
+band per arm (:func:`~demflow.cases.miyata_uniaxial3d_bands.band_of`, the page's rule) beside the stored LIGGGHTS runs,
 and whether each LIGGGHTS value lies inside each band.  Dask, 2 workers.
 Results: benchmarks/results/uniaxial3d_insertion_study.txt; see README, miyata-uniaxial-3d.
 """
@@ -27,7 +27,9 @@ import warnings
 import numpy as np
 
 from demflow.cases import get_case
-from demflow.cases.miyata_uniaxial3d import band_of, protocol_run, run_statistics
+from demflow.cases.miyata_uniaxial3d_bands import band_of
+from demflow.cases.miyata_uniaxial3d_protocol import protocol_run
+from demflow.cases.miyata_uniaxial3d_statistics import run_statistics
 from demflow.engines.uniaxial3d import UniaxialRun
 from demflow.sweep import run_sweep
 

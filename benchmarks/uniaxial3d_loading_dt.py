@@ -28,8 +28,9 @@ from pathlib import Path
 import pandas as pd
 
 from demflow.cases import get_case
-from demflow.cases.miyata_uniaxial3d import (ProtocolCheckpoints, protocol_run, seed_statement_checks,
-                                             stress_falls)
+from demflow.cases.miyata_uniaxial3d_protocol import ProtocolCheckpoints, protocol_run
+from demflow.cases.miyata_uniaxial3d import seed_statement_checks
+from demflow.cases.miyata_uniaxial3d_statistics import stress_falls
 
 CASE = "miyata-uniaxial-3d-ellipsoids-full"
 

@@ -9,7 +9,7 @@ import pytest
 
 import demflow as df
 from demflow.cases import get_case
-from demflow.cases.miyata_uniaxial3d import insertion_scene, particle_tops
+from demflow.cases.miyata_uniaxial3d_protocol import insertion_scene, particle_tops
 from demflow.shapes.clump import MIYATA_AXES, MIYATA_MASS
 
 
@@ -49,7 +49,7 @@ def test_an_unknown_shape_is_refused_naming_it():
 def test_bed_figures_write_a_vtk_bed_and_a_plate_force_map(tmp_path):
     """The figure page's bed picture (matplotlib), its VTK file (member centres with radius and body) and
     the plate force map of the last snapshot."""
-    from demflow.cases.miyata_uniaxial3d import bed_figures
+    from demflow.cases.miyata_uniaxial3d_figures import bed_figures
 
     rng = np.random.default_rng(0)
     pos = rng.uniform(0.0, 2.0, (16, 3))
@@ -72,7 +72,7 @@ def _small(**kw):
 
 
 def _protocol(p):
-    from demflow.cases.miyata_uniaxial3d import protocol_run
+    from demflow.cases.miyata_uniaxial3d_protocol import protocol_run
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", df.UnsafeTimeStepWarning)
@@ -82,7 +82,7 @@ def _protocol(p):
 # calls of Simulation3D.run: 4 settling chunks per stage, then one per record of the loading (11 records)
 @pytest.mark.parametrize("stop_after", [2, 6, 16])  # in the first settling, in the second, in the loading
 def test_an_interrupted_protocol_resumes_from_its_checkpoints_to_the_bit(tmp_path, monkeypatch, stop_after):
-    import demflow.cases.miyata_uniaxial3d as m
+    import demflow.cases.miyata_uniaxial3d_protocol as m
     from demflow.simulation3d import Simulation3D
 
     monkeypatch.setattr(m, "CHECKPOINT_STEPS", 1000)  # a checkpoint at every settling chunk and every 5 records
@@ -123,7 +123,7 @@ def test_an_interrupted_protocol_resumes_from_its_checkpoints_to_the_bit(tmp_pat
 
 
 def test_checkpoints_of_other_parameters_are_not_resumed(tmp_path):
-    from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints
+    from demflow.cases.miyata_uniaxial3d_protocol import ProtocolCheckpoints
 
     a = ProtocolCheckpoints(tmp_path, _small())
     assert a.dir == ProtocolCheckpoints(tmp_path, _small(progress=True, band_seeds=3)).dir  # not physics
@@ -223,7 +223,7 @@ def test_a_particles_contact_point_is_its_members_force_weighted_centre_across_t
     3): the point is 1.9 + (0.2 × 3/4) = 2.05 → 0.05; body 1's single member is itself; ascending body order."""
     from types import SimpleNamespace
 
-    from demflow.cases.miyata_uniaxial3d import per_particle_forces, wall_contact_points
+    from demflow.cases.miyata_uniaxial3d_protocol import per_particle_forces, wall_contact_points
 
     n = 4
     sp = SimpleNamespace(pos=np.array([[1.9, 1.0, 0.1], [0.1, 1.2, 0.1], [0.7, 0.3, 0.1], [1.0, 1.0, 1.0]]),
@@ -240,7 +240,7 @@ def test_the_ellipsoid_full_variant_is_the_full_protocol_with_the_seeds_particle
     """miyata-uniaxial-3d-ellipsoids-full differs from miyata-uniaxial-3d-full only in the particle and where its
     checkpoints live, and its checkpoints are never the clumps' (the shape is part of their key)."""
     from demflow.cases import get_case
-    from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints
+    from demflow.cases.miyata_uniaxial3d_protocol import ProtocolCheckpoints
 
     full, ell = get_case("miyata-uniaxial-3d-full"), get_case("miyata-uniaxial-3d-ellipsoids-full")
     differ = {k for k in full.params if full.params[k] != ell.params[k]}
@@ -254,7 +254,7 @@ def test_monotone_steps_and_stress_falls_on_a_hand_made_curve():
     """The monotone check's samples and the falls below the running maximum, on a curve worked by hand."""
     import pandas as pd
 
-    from demflow.cases.miyata_uniaxial3d import monotone_steps, stress_falls
+    from demflow.cases.miyata_uniaxial3d_statistics import monotone_steps, stress_falls
 
     c = pd.DataFrame({"settlement": [0.0, 1.0, 2.0, 3.0, 4.0, 5.0], "plate_stress": [0.0, 10.0, 20.0, 15.0, 30.0, 5.0]})
     # settlements 1..5 sampled at 5 points: the records themselves
@@ -284,7 +284,7 @@ def test_random_insertion_follows_the_liggghts_decks_rule():
     none overlapping, in a region as tall as the deck's; the same seed gives the same points; no room is an error."""
     import math
 
-    from demflow.cases.miyata_uniaxial3d import bounding_radius, random_insertion
+    from demflow.cases.miyata_uniaxial3d_protocol import bounding_radius, random_insertion
     from demflow.engines.liggghts_uniaxial3d import PACKING
 
     p = get_case("miyata-uniaxial-3d").merged()
@@ -309,7 +309,7 @@ def test_random_insertion_follows_the_liggghts_decks_rule():
 def test_insertion_option_leaves_the_lattice_and_its_checkpoints_alone(tmp_path):
     """insertion='lattice' (the default) is the case's lattice, its checkpoint key unchanged by the option's
     existence; 'random' moves the particles and keys its checkpoints apart; anything else is refused."""
-    from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints, insertion_scene
+    from demflow.cases.miyata_uniaxial3d_protocol import ProtocolCheckpoints, insertion_scene
     from demflow.scene import SceneError
 
     p = get_case("miyata-uniaxial-3d").merged({"n_insert": 8})
@@ -327,7 +327,7 @@ def test_insertion_option_leaves_the_lattice_and_its_checkpoints_alone(tmp_path)
 def test_shear_spring_option_sets_the_law_and_keys_checkpoints_apart(tmp_path):
     """shear_spring='total' (LIGGGHTS's Mindlin spring, capabilities row shear-spring-uniaxial) reaches every law of
     the protocol's scenes; the default keeps the incremental spring and its checkpoint key."""
-    from demflow.cases.miyata_uniaxial3d import ProtocolCheckpoints
+    from demflow.cases.miyata_uniaxial3d_protocol import ProtocolCheckpoints
 
     p = get_case("miyata-uniaxial-3d").merged({"n_insert": 8})
     assert {law.shear_spring for law in insertion_scene(p).laws.values()} == {"incremental"}
@@ -346,7 +346,7 @@ def _synthetic_seeds(rng, n, shift=0.0, prefix="s"):
 
 
 def test_holm_adjustment_matches_its_definition():
-    from demflow.cases.miyata_uniaxial3d import holm
+    from demflow.cases.miyata_uniaxial3d_bands import holm
 
     # p sorted: 0.01, 0.02, 0.04 (m = 3): 3 × 0.01, max(0.03, 2 × 0.02), max(0.04, 1 × 0.04); nan kept out and as is
     out = holm({"x": 0.04, "y": 0.01, "z": 0.02, "w": math.nan})
@@ -359,7 +359,7 @@ def test_engine_ensemble_passes_draws_of_demflows_distribution_and_fails_a_shift
     """miyata3d.engine-ensemble's negative control on synthetic seeds: 8 + 8 runs from one distribution pass the
     Holm-adjusted Welch lines in at least 90 of 100 draws (family-wise level 5 %); a shift of 3 s.d. in one
     statistic fails in at least 90 of 100 (Welch's power at 8 + 8 and 3 s.d. is about 0.99)."""
-    from demflow.cases.miyata_uniaxial3d import ENSEMBLE_ALPHA, ensemble_comparison
+    from demflow.cases.miyata_uniaxial3d_bands import ENSEMBLE_ALPHA, ensemble_comparison
 
     rng = np.random.default_rng(20261128)
     same = shifted = 0
@@ -383,7 +383,7 @@ def test_engine_ensemble_negative_control_fails_ten_percent_more_particles():
 
 
 def test_miss_rate_test_is_one_sided_fisher():
-    from demflow.cases.miyata_uniaxial3d import miss_rate_test
+    from demflow.cases.miyata_uniaxial3d_bands import miss_rate_test
 
     # 2 misses among 16 runs, 8 of them the engine's: P(X >= 1) = 1 - C(14, 8)/C(16, 8) (hypergeometric)
     assert miss_rate_test(1, 8, 1, 8) == pytest.approx(1.0 - math.comb(14, 8) / math.comb(16, 8), rel=1e-12)

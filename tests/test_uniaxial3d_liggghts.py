@@ -17,7 +17,8 @@ P = dict(box=1.0, n_insert=8, trim=0.55, stress_max=400e3, snapshots=2, settle_m
 
 @pytest.fixture(scope="module")
 def ran(tmp_path_factory):
-    from demflow.cases.miyata_uniaxial3d import MiyataUniaxial3D, insertion_scene
+    from demflow.cases.miyata_uniaxial3d import MiyataUniaxial3D
+    from demflow.cases.miyata_uniaxial3d_protocol import insertion_scene
     from demflow.engines.liggghts_uniaxial3d import LiggghtsUniaxial3DEngine
 
     p = dict(MiyataUniaxial3D.params, **P)

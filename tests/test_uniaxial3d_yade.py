@@ -12,7 +12,8 @@ import pytest
 
 from demflow.build import build
 from demflow.cases import get_case
-from demflow.cases.miyata_uniaxial3d import insertion_scene, run_statistics
+from demflow.cases.miyata_uniaxial3d_protocol import insertion_scene
+from demflow.cases.miyata_uniaxial3d_statistics import run_statistics
 from demflow.engines import EngineOutputError, EngineUnsupported
 from demflow.engines.uniaxial3d import PLATE_GAP, protocol_numbers, read_uniaxial_output
 from demflow.engines.yade_uniaxial3d import YadeUniaxial3DEngine
@@ -204,7 +205,7 @@ def test_leave_one_out_counts_how_often_a_fair_draw_misses_the_band():
     """Eight seeds of one statistic spread 1.0-1.07 and an outlier (1.2): only the outlier misses the other
     eight's band (1 of 9 judged); a statistic whose band is wider than the informative limit is not judged
     while inside it."""
-    from demflow.cases.miyata_uniaxial3d import leave_one_out_misses
+    from demflow.cases.miyata_uniaxial3d_bands import leave_one_out_misses
 
     vals = [1.0, 1.01, 1.02, 1.03, 1.04, 1.05, 1.06, 1.07, 1.2]
     per_seed = {k: {"narrow": v, "wide": [0.1, 5.0, 0.2, 4.0, 0.3, 3.0, 0.5, 2.0, 1.0][k]} for k, v in enumerate(vals)}
@@ -218,7 +219,7 @@ def test_one_band_rule_judges_engine_runs_demflows_seeds_and_the_per_run_lines()
     import math
 
     from demflow.cases.base import CaseRun
-    from demflow.cases.miyata_uniaxial3d import judge_value, leave_one_out_misses, run_has_miss, seed_band
+    from demflow.cases.miyata_uniaxial3d_bands import judge_value, leave_one_out_misses, run_has_miss, seed_band
 
     vals = [1.0, 1.01, 1.02, 1.03, 1.04, 1.05, 1.06, 1.07]
     assert judge_value(math.nan, vals) is False and judge_value(1.03, vals) is True

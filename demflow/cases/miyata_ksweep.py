@@ -2,12 +2,12 @@
 and what it changes.
 
 The ``miyata-uniaxial-3d`` protocol (reduced 2 × 2 m box: insert, settle, trim at 2.0 m, settle, load the
-plate at 2 cm/s to 600 kPa; :func:`demflow.cases.miyata_uniaxial3d.protocol_run`) is run with the seed's
+plate at 2 cm/s to 600 kPa; :func:`demflow.cases.miyata_uniaxial3d_protocol.protocol_run`) is run with the seed's
 own particle, the 191 kg ellipsoid (Lin & Ng contact, :mod:`demflow.ellipsoids3d`), and with clumps of K
 spheres (the greedy inscribed covers of :meth:`demflow.shapes.clump.ClumpTemplate.ellipsoid_like`, mass and
 inertia of the union scaled to 191 kg) on the same seeds, so on the same insertion lattice and orientations.
 
-For every shape each seed's :func:`~demflow.cases.miyata_uniaxial3d.run_statistics` is computed (particles
+For every shape each seed's :func:`~demflow.cases.miyata_uniaxial3d_statistics.run_statistics` is computed (particles
 left after trimming, the bed's top, the plate's height where the stress first reaches 100 ... 600 kPa, the
 particles on the floor and plate, q-model N), and the shape is compared with the ellipsoids statistic by
 statistic (:func:`compare_shapes`): the difference of the seed means, relative to the ellipsoids' mean and in
@@ -26,7 +26,9 @@ import numpy as np
 
 from ..tolerances import tol
 from .base import Case, CaseRun, Check
-from .miyata_uniaxial3d import MiyataUniaxial3D, protocol_run, run_statistics
+from .miyata_uniaxial3d import MiyataUniaxial3D
+from .miyata_uniaxial3d_protocol import protocol_run
+from .miyata_uniaxial3d_statistics import run_statistics
 
 SRC = "Miyata §3.3 (issue 16 item 3)"
 

@@ -321,7 +321,7 @@ class MiyataUniaxial2DEngines(Case):
     def checks(self, run, p):
         from scipy import stats
 
-        from .miyata_uniaxial3d import BAND_INFORMATIVE, band_of
+        from .miyata_uniaxial3d_bands import BAND_INFORMATIVE, band_of
 
         out = []
         for s in SAMPLES:

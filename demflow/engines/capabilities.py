@@ -487,12 +487,12 @@ FEATURES_UNIAXIAL_3D: tuple[Feature, ...] = (
                                 "insertion fixes)", DIFFERS, "another random bed (compared statistically)"),
             measured="mass and moments equal the template's to 1e-12 in both engines (tests/test_uniaxial3d_yade.py, "
                      "tests/test_uniaxial3d_liggghts.py). LIGGGHTS's bed isolated: demflow's own beds inserted by the "
-                     "deck's insert/pack rule (insertion='random', demflow.cases.miyata_uniaxial3d.random_insertion), "
-                     "8 seeds without local damping, settle 71 mm at 100 kPa on average against 95 mm on demflow's "
+                     "deck's insert/pack rule (insertion='random', "
+                     "demflow.cases.miyata_uniaxial3d_protocol.random_insertion), 8 seeds without local damping, settle 71 mm at 100 kPa on average against 95 mm on demflow's "
                      "lattice, and their band [-69, 211] mm still leaves out LIGGGHTS seed 1's 213 mm "
                      "(benchmarks/uniaxial3d_insertion_study.py, results/uniaxial3d_insertion_study.txt, 2026-11-27)"),
     Feature("trim-3d", "removing the particles above the trim height", "the next stage is built from the kept "
-            "bodies (demflow.cases.miyata_uniaxial3d.next_stage)",
+            "bodies (demflow.cases.miyata_uniaxial3d_protocol.next_stage)",
             yade=Expression("deleteClumpBody, then a fresh InsertionSortCollider (2023.02a hangs after a deletion in "
                             "a periodic scene)", EXACT),
             liggghts=Expression("delete_atoms leaves orphan members in a periodic box: pass 1 counts the bodies at "

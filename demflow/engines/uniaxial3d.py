@@ -22,7 +22,7 @@ What every engine deck writes into its working directory (read by :func:`read_un
   it was taken [Pa]), wall ("plate" or "floor"), force (one particle's normal force on that wall,
   the sum over its member spheres [N]), x, y (where the particle touches the wall: the normal-force-
   weighted mean of its touching members' centres, periodic minimum image, wrapped into the box [m];
-  :func:`demflow.cases.miyata_uniaxial3d.wall_contact_points`); one snapshot when the plate stress first
+  :func:`demflow.cases.miyata_uniaxial3d_protocol.wall_contact_points`); one snapshot when the plate stress first
   reaches each of ``snapshot_levels``.
 """
 from __future__ import annotations
@@ -41,7 +41,7 @@ CURVE_COLUMNS = ("step", "plate_z", "settlement", "plate_stress", "floor_stress"
 SNAPSHOT_COLUMNS = ("snapshot", "stress", "wall", "force", "x", "y")
 OUT_KEYS = ("n_inserted", "n_particles", "weight", "floor_settled", "settle_steps", "dt", "plate_start", "clump_mass",
             "clump_inertia")
-SETTLE_CHECK_EVERY = 5000  # steps between at-rest checks (demflow.cases.miyata_uniaxial3d.settle)
+SETTLE_CHECK_EVERY = 5000  # steps between at-rest checks (demflow.cases.miyata_uniaxial3d_protocol.settle)
 SETTLE_KE_FRACTION = 1e-9  # at rest: kinetic energy < this × the bed's weight × 1 m
 PLATE_GAP = 0.005  # the plate starts this far above the highest particle point [m]
 
