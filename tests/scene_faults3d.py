@@ -13,7 +13,7 @@ from demflow import (Box, ClumpTemplate, Clumps, Ellipsoids, HertzMindlinLaw, Ma
                      PlateServo, Scene3D, Spheres, TriangleMesh)
 from demflow.scene import GlobalDamping
 
-from scene_faults import (BAD_FINITE, BAD_FLAG, BAD_IDENT, BAD_NONNEG, BAD_POSITIVE, BAD_WHOLE, BAD_ENTRY, Fault,
+from scene_faults import (BAD_FLAG, BAD_IDENT, BAD_NONNEG, BAD_POSITIVE, BAD_WHOLE, BAD_ENTRY, Fault,
                           NAN, INF, NOT_NUMBERS)
 
 FAULTS3D: list[Fault] = []

@@ -83,7 +83,7 @@ def test_determinism_same_scene_same_results():
 
 def test_checkpoint_resume_equals_continuous_run(tmp_path):
     full = build(_frictional_box(2000)).run()
-    part = build(_frictional_box(2000)).run(1000, checkpoint=tmp_path / "c.npz")
+    build(_frictional_box(2000)).run(1000, checkpoint=tmp_path / "c.npz")
     resumed = build(_frictional_box(2000)).load_checkpoint(tmp_path / "c.npz").run(1000)
     assert resumed.step == 2000
     assert np.array_equal(full.x, resumed.x) and np.array_equal(full.om, resumed.om)

@@ -147,12 +147,14 @@ def test_lever_arm_difference_is_isolated(tmp_path):
 @pytest.mark.parametrize("engine", ["yade", "liggghts"])
 def test_stored_uniaxial_decks_are_what_the_writer_writes(engine, tmp_path):
     """The stored miyata-uniaxial-2d decks are the ones the harness writes now from seed 1's bed (runs seed 1 of
-    the band, ~25 s, or loads its checkpoint)."""
+    the band, ~25 s, checkpointed under tmp_path: the user's runs/ is not written, and a checkpoint made by other
+    code is never read)."""
     from demflow.engines import reference
 
     case = E.MiyataUniaxial2DEngines()
+    params = dict(case.params, checkpoint_dir=str(tmp_path / "checkpoints"))
     for v in case.reference_plan().variants(engine):
-        sc = case.reference_plan().scene(v, dict(case.params))
+        sc = case.reference_plan().scene(v, params)
         get_engine(engine).write_deck(sc, build(sc), tmp_path)
         stored = reference.location(E.STORE, v, engine)
         for f in ("deck.py", "deck.in", "scene.json"):
