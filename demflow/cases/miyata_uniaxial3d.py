@@ -24,15 +24,13 @@ from .base import Case, CaseRun, Check
 from .miyata_uniaxial3d_protocol import G, insertion_scene, protocol_run
 from .miyata_uniaxial3d_statistics import (SEED_MUETH, cluster_bootstrap, monotone_steps, pooled_f, pooled_f_snaps,
                                            regime_numbers, run_statistics, stress_falls)
-from .miyata_uniaxial3d_bands import (BAND_INFORMATIVE, ENSEMBLE_ALPHA, ENSEMBLE_MIN_RUNS, band_of, band_summary, engine_band,
-                                      engine_of, engine_variants, ensemble_comparison, judge, ks_from_pooled,
-                                      leave_one_out_misses, miss_rate_test, run_has_miss, seed_band, vs_level)
+from .miyata_uniaxial3d_bands import (BAND_INFORMATIVE, ENSEMBLE_ALPHA, ENSEMBLE_MIN_RUNS, band_of, band_summary,
+                                      engine_band, engine_of, engine_variants, ensemble_comparison, judge,
+                                      ks_from_pooled, miss_rate_test, run_has_miss, seed_band, vs_level)
 from .miyata_uniaxial3d_figures import bed_figures, engine_figures, force_statistics_figure, micro_figure
 
 
 SRC = "Miyata §3.3"
-
-
 SEED_FLOOR_STRESS = 1469 * 191.0 * G / 100.0  # the seed's self-weight floor stress [Pa]
 
 
@@ -261,6 +259,7 @@ class MiyataUniaxial3D(Case):
         if len(ex.get("band", {})) < 3:
             return out
         summaries = {id(b): band_summary(b) for b in (ex["band"], ex.get("band_undamped", {})) if len(b) >= 3}
+        any_ensemble = False
         for e in self.engines:
             runs = {label: u for label, u in ex["engines"].items() if engine_of(label) == e}
             if not runs:
@@ -269,6 +268,7 @@ class MiyataUniaxial3D(Case):
                 continue
             matched = engine_band(ex, e)
             ensemble = len(runs) >= ENSEMBLE_MIN_RUNS
+            any_ensemble |= ensemble
             st = {label: run_statistics(u) for label, u in runs.items()}
             fe = {label: pooled_f(u) for label, u in runs.items()}
             ks = {i: {label: ks_from_pooled(f, b.pooled) for label, f in fe.items()} for i, b in summaries.items()}
@@ -285,11 +285,11 @@ class MiyataUniaxial3D(Case):
                 for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
                     if len(band) >= 3:
                         out += self._ensemble_checks(e, st, ks[id(band)], summaries[id(band)], name, band is matched)
-        if any(len([1 for label in ex["engines"] if engine_of(label) == e]) >= ENSEMBLE_MIN_RUNS for e in self.engines):
+        if any_ensemble:
             out.append(ensemble_negative_control(summaries[id(ex["band"])].per_seed))
         for name, band in (("", ex["band"]), (" (no local damping)", ex.get("band_undamped", {}))):
             if len(band) >= 4:
-                judged, outside, seeds = leave_one_out_misses(summaries[id(band)].per_seed)
+                judged, outside, seeds = summaries[id(band)].loo
                 out.append(Check.info(
                     f"demflow's own seeds judged like an engine run, each against the band of the other "
                     f"{len(band) - 1}{name}: {outside} of {judged} judged statistics outside, {seeds} of {len(band)} "
@@ -400,7 +400,7 @@ class MiyataUniaxial3D(Case):
             else:
                 out.append(judged(f"{what} {vs_level(ph)}", ph >= ENSEMBLE_ALPHA, ph, why))
         e_miss = sum(run_has_miss(v, per_seed) for v in st.values())
-        d_miss = sum(run_has_miss(per_seed[s], {q: v for q, v in per_seed.items() if q != s}) for s in per_seed)
+        d_miss = summary.loo[2]  # demflow's seeds with a miss against the band of the others: the same rule
         p = miss_rate_test(e_miss, len(st), d_miss, len(per_seed))
         out.append(judged(
             f"{head}: runs with a statistic outside the band {e_miss} of {len(st)}, demflow's seeds against the band of "

@@ -26,31 +26,33 @@ def band_of(values) -> tuple[float, float]:
     return prediction_band(v) if v.size >= 3 else (math.nan, math.nan)
 
 
-def ks_band(band: dict, wall: str = "plate") -> tuple[np.ndarray, float]:
-    """The KS distance of each demflow seed's pooled f on ``wall`` from the other seeds' pooled f, and the
-    upper end of their 95 % prediction band: how far one more seed's distribution falls from the rest."""
+def ks_band(f: dict) -> tuple[np.ndarray, float]:
+    """The KS distance of each demflow seed's pooled f (``f``: {seed: :func:`pooled_f`}) from the other seeds' pooled
+    f, and the upper end of their 95 % prediction band: how far one more seed's distribution falls from the rest."""
     from scipy import stats
 
-    f = {s: pooled_f(u, wall) for s, u in band.items()}
     d = [stats.ks_2samp(f[s], np.concatenate([g for q, g in f.items() if q != s])).statistic for s in f]
     return np.asarray(d), band_of(d)[1]
 
 
 class BandSummary(NamedTuple):
     """What every engine run is judged against, computed once per band (:func:`band_summary`): each seed's
-    :func:`run_statistics` (``per_seed``), the KS distances of :func:`ks_band` (``ks_seeds``, ``ks_hi``), and the
-    seeds' pooled plate forces (``pooled``)."""
+    :func:`run_statistics` (``per_seed``), the KS distances of :func:`ks_band` (``ks_seeds``, ``ks_hi``), the
+    seeds' pooled plate forces (``pooled``), and demflow's own leave-one-out misses (``loo``:
+    :func:`leave_one_out_misses`' (judged, outside, seeds with a miss))."""
     per_seed: dict
     ks_seeds: np.ndarray
     ks_hi: float
     pooled: np.ndarray
+    loo: tuple
 
 
 def band_summary(band: dict) -> BandSummary:
     """The :class:`BandSummary` of demflow's seed ``band`` ({seed: run})."""
-    ks_seeds, ks_hi = ks_band(band)
-    return BandSummary({s: run_statistics(v) for s, v in band.items()}, ks_seeds, ks_hi,
-                       np.concatenate([pooled_f(v) for v in band.values()]))
+    f = {s: pooled_f(u) for s, u in band.items()}
+    per_seed = {s: run_statistics(u) for s, u in band.items()}
+    ks_seeds, ks_hi = ks_band(f)
+    return BandSummary(per_seed, ks_seeds, ks_hi, np.concatenate(list(f.values())), leave_one_out_misses(per_seed))
 
 
 def ks_from_pooled(f: np.ndarray, pooled: np.ndarray) -> float:
@@ -81,8 +83,6 @@ def leave_one_out_misses(per_seed: dict) -> tuple[int, int, int]:
 
 
 ENSEMBLE_MIN_RUNS = 4  # an engine with this many stored runs is judged as an ensemble (one draw each below)
-
-
 ENSEMBLE_ALPHA = tol("miyata3d.engine-ensemble").value
 
 

@@ -143,14 +143,8 @@ def insertion_scene(p) -> Scene3D:
 
 
 SETTLE_CHUNK = 5000  # steps between the settling tests
-
-
 CHECKPOINT_STEPS = 50000  # a resumable state at least this often (about a minute of the full variant)
-
-
 PROTOCOL_VERSION = 3  # raise when protocol_run's stages, records or inputs change: old checkpoints are then not resumed
-
-
 # (3: the clump template's principal frame without BLAS, 2026-11-25, which moved its last bits)
 # the parameters that make a protocol run what it is: its checkpoints are kept under a hash of them
 PROTOCOL_KEYS = ("shape", "box", "n_insert", "K", "seed", "trim", "plate_speed", "stress_max", "dt_fraction",
