@@ -1,5 +1,6 @@
 """The speed-accuracy study object (issue 17 item 1): a knob study of the two-disc impact, its table,
 Pareto front, recommendation and figure; the CLI; bad knobs refused."""
+import copy
 import subprocess
 import sys
 
@@ -138,6 +139,12 @@ def test_a_tiny_study_with_fixed_parameters_two_knobs_and_an_observable_filter()
     infos = [c.name for c in checks if c.kind == "info"]
     assert any(n.startswith("chaos floor: kn = 10001000.0") for n in infos)
     assert any(n.startswith("recommended:") for n in infos)
+    # names identify a check across runs: a measured time goes in the text, not in the name
+    slow = copy.deepcopy(run)
+    slow.extras["study"].table["wall_s"] *= 3.0
+    slow.extras["study"].recommended["wall_s"] *= 3.0
+    again = case.checks(slow, p)
+    assert [c.name for c in again] == [c.name for c in checks] and [c.why for c in again] != [c.why for c in checks]
     (title, table), = case.tables(run, p)
     assert "t_end = 0.05" in title and list(table.value)[:2] == ["", ""]
 
