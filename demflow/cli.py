@@ -277,7 +277,8 @@ def main(argv=None):
 
         save_figure(fig, str(out / "tradeoff.png"))
         print(t.to_string(index=False))
-        print(f"recommended: {study.recommended['run']}; table and figure in {out}")
+        print(f"recommended: {study.recommended['run']} (wall times within {study.timing_noise:.0%} of the cheapest "
+              f"count as equally cheap: the reference and chaos-floor runs' own difference); table and figure in {out}")
         return 0
     if args.cmd == "sweep":
         from .sweep import case_sweep

@@ -170,7 +170,7 @@ def test_a_resolution_knob_below_the_chaos_floor_fails_its_check_and_says_why():
                           error=[0.0, 0.03, 0.02, 0.025, 0.5], wall_s=[4.0, 4.0, 1.0, 2.0, 4.0],
                           recommended=[False, False, True, False, False]))
     s = SimpleNamespace(table=t, floor={"kn": 1.0001e7}, floor_error=0.03, accept=2.0, within_floor=True,
-                        recommended=t.iloc[2].to_dict())
+                        timing_noise=0.0, recommended=t.iloc[2].to_dict())
     case = TinyImpactStudy()
     checks = case.checks(CaseRun(extras={"study": s}), case.merged())
     (dt,) = [c for c in checks if c.kind == "self-consistency"]
@@ -211,3 +211,21 @@ def test_falling_disc_without_its_dt_twin_observes_velocity_and_drag():
     assert not any(c.name.startswith("Δt study") for c in case.checks(run, p))
     obs = case.observables(run, p)
     assert len(obs) == 5 and obs["v(t = 1 t_end) [cm/s]"] < obs["v(t = 0.5 t_end) [cm/s]"] < 0
+
+
+def test_settings_as_cheap_as_the_timing_noise_says_are_tied_and_the_most_accurate_is_recommended():
+    """The chaos-floor run repeats the reference's work: the difference of their wall times is the host's noise, and
+    knob runs within it of the cheapest are equally cheap (the pick among three Δt settings within 8 % of each other
+    followed the host's noise from run to run)."""
+    import pandas as pd
+
+    from demflow.tradeoff import recommend, timing_noise
+
+    t = pd.DataFrame(dict(run=["reference", "chaos floor", "a", "b", "c", "d"], knob=["", "", "k", "k", "k", "k"],
+                          error=[0.0, 0.03, 0.05, 0.04, 0.02, 0.01], wall_s=[8.0, 8.8, 6.2, 6.5, 6.7, 9.0]))
+    assert timing_noise(t) == pytest.approx(0.1)
+    assert recommend(t, 0.03, 2.0, timing_noise(t)) == (4, True)  # a, b, c tie (within 10 % of 6.2): c, the most accurate
+    assert recommend(t, 0.03, 2.0, 0.0) == (2, True)  # no noise: the cheapest, as before
+    assert recommend(t, 0.03, 2.0, 0.05) == (3, True)  # 5 %: a and b tie
+    assert recommend(t, 0.001, 2.0, 0.1) == (5, False)  # none within the floor: the most accurate
+    assert timing_noise(t[t.run != "chaos floor"]) == 0.0

@@ -161,9 +161,12 @@ class TradeoffCase(Case):
         rec = s.recommended
         why = (f"the cheapest within {s.accept:g} × the chaos floor {s.floor_error:.3g}" if s.within_floor else
                f"none is within {s.accept:g} × the chaos floor {s.floor_error:.3g}: the most accurate")
+        tie = (f" Wall times within {s.timing_noise:.0%} of the cheapest (the reference and chaos-floor runs' own "
+               "difference: the host's noise) count as equally cheap, and the most accurate of those is picked."
+               if s.within_floor else "")
         out.append(Check.info(f"recommended: {rec['run']} (error {rec['error']:.3g}; {why})", rec["error"], self.source,
                               f"The recommendation, not a pass/fail: see the figure and the table. Its run took "
-                              f"{rec['wall_s']:.3g} s."))
+                              f"{rec['wall_s']:.3g} s.{tie}"))
         return out
 
     def tables(self, run, p):
