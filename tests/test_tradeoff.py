@@ -229,3 +229,4 @@ def test_settings_as_cheap_as_the_timing_noise_says_are_tied_and_the_most_accura
     assert recommend(t, 0.03, 2.0, 0.05) == (3, True)  # 5 %: a and b tie
     assert recommend(t, 0.001, 2.0, 0.1) == (5, False)  # none within the floor: the most accurate
     assert timing_noise(t[t.run != "chaos floor"]) == 0.0
+    assert timing_noise(t.assign(wall_s=[0.0, 8.8, 6.2, 6.5, 6.7, 9.0])) == 0.0  # no reference time: no noise measured
