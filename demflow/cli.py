@@ -255,7 +255,7 @@ def main(argv=None):
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from .tradeoff import TradeoffStudy
+        from .tradeoff import TradeoffStudy, tie_rule
 
         try:
             study = TradeoffStudy(args.case, _parse_grid(args.knob), reference=_parse_sets(args.reference),
@@ -277,8 +277,7 @@ def main(argv=None):
 
         save_figure(fig, str(out / "tradeoff.png"))
         print(t.to_string(index=False))
-        print(f"recommended: {study.recommended['run']} (wall times within {study.timing_noise:.0%} of the cheapest "
-              f"count as equally cheap: the reference and chaos-floor runs' own difference); table and figure in {out}")
+        print(f"recommended: {study.recommended['run']}. {tie_rule(study.timing_noise)} Table and figure in {out}")
         return 0
     if args.cmd == "sweep":
         from .sweep import case_sweep

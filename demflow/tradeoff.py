@@ -18,13 +18,14 @@ simulation time split into DEM and fluid (BEM) time where the results record the
 :func:`demflow.sweep.run_sweep` (serial by default, a Dask cluster on request).
 
 The table marks the Pareto front (no other run is both cheaper and more accurate) and the
-*recommended* setting: the cheapest knob setting whose error is within ``accept`` × the chaos floor
-(default 2: indistinguishable from the reference up to the floor's own noise), or the most accurate
-knob setting when none is (``within_floor`` says which).  "Cheapest" is judged against the timing's own noise
-(:func:`timing_noise`): the settings whose wall time is within it of the cheapest one's are equally cheap, and
-the most accurate of them is recommended, so that the pick does not follow the host's noise from run to run
-(it did: the photoelastic study's three Δt settings, 6.2-6.7 s of wall time in one run, picked 0.1, 0.07 or 0.05
-over ten runs, README).  With ``warmup`` one untimed run compiles
+*recommended* setting: among the knob settings whose error is within ``accept`` × the chaos floor (default 2:
+indistinguishable from the reference up to the floor's own noise), the most accurate of the cheapest, or the most
+accurate knob setting when none is within it (``within_floor`` says which).  "Cheapest" is judged against the
+timing's own noise (:func:`timing_noise`): the reference runs once more as the study's last run (the same work, the
+same bits: determinism), and the settings whose wall time is within the two reference runs' relative difference of
+the cheapest one's are equally cheap (:func:`recommend`), so that the pick does not follow the host's noise from run
+to run (it did: the photoelastic study's three Δt settings, 6.2-6.7 s of wall time in one run, picked 0.1, 0.07 or
+0.05 over ten runs, README).  With ``warmup`` one untimed run compiles
 the kernels first, so that no timed run pays for compilation (``True``: the last knob run; a dict:
 overrides of the reference for a cheaper run that compiles the same kernels).
 """
@@ -62,16 +63,26 @@ def run_observed(job) -> dict:
     return dict(observables=obs, wall_s=wall, **_cost(run))
 
 
+REPEAT = "reference (repeat)"
+
+
 def timing_noise(table: pd.DataFrame) -> float:
-    """How far apart the wall times of two runs doing the same work are in this study: the chaos-floor run repeats
-    the reference run's work (the same steps, on a copy perturbed far below anything the observables resolve), so
-    |t_floor - t_ref| / t_ref is the host's noise between two runs of the study, measured in it.  0 without a
-    floor run."""
+    """How far apart the wall times of two runs doing the same work are in this study: the reference runs first and
+    once more last (the repeat: the same parameters, the same steps, the same bits), so |t_repeat - t_ref| / t_ref is
+    the host's noise between two runs of the study, over the study's whole duration.  0 without a repeat run or a
+    reference time."""
     ref = table[table.run == "reference"].wall_s
-    fl = table[table.run == "chaos floor"].wall_s
-    if ref.empty or fl.empty or not float(ref.iloc[0]) > 0:
+    rep = table[table.run == REPEAT].wall_s
+    if ref.empty or rep.empty or not float(ref.iloc[0]) > 0:
         return 0.0
-    return abs(float(fl.iloc[0]) - float(ref.iloc[0])) / float(ref.iloc[0])
+    return abs(float(rep.iloc[0]) - float(ref.iloc[0])) / float(ref.iloc[0])
+
+
+def tie_rule(noise: float) -> str:
+    """The sentence that says how the recommendation treats the timing noise (the page and ``demflow tradeoff``)."""
+    return (f"Wall times within {noise:.0%} of the cheapest count as equally cheap (the reference run and its repeat, "
+            "the study's first and last runs, differ by that much: the host's noise), and the most accurate of those "
+            "is recommended.")
 
 
 def recommend(table: pd.DataFrame, floor_error: float, accept: float, noise: float) -> tuple[int, bool]:
@@ -141,6 +152,7 @@ class TradeoffStudy:
         for k, values in self.knobs.items():
             for v in values:
                 jobs.append((f"{k} = {v}", k, v, dict(self.reference, **{k: v})))
+        jobs.append((REPEAT, None, None, dict(self.reference)))  # last: the timing noise over the whole study
         return jobs
 
     def compared(self, obs: dict, ref: dict) -> int:
@@ -163,7 +175,7 @@ class TradeoffStudy:
         if isinstance(self.warmup, dict):  # compile the kernels before anything is timed (serial runs share
             run_observed((self.case, dict(self.reference, **self.warmup)))  # this process)
         elif self.warmup:
-            run_observed((self.case, jobs[-1][3]))
+            run_observed((self.case, jobs[-2][3]))  # the last knob run (the repeat is last)
         self.runs = run_sweep(run_observed, [(self.case, over) for *_, over in jobs], scheduler=self.scheduler,
                               workers=self.workers)
         ref = self.runs[0]["observables"]
@@ -179,6 +191,7 @@ class TradeoffStudy:
         t["error_over_floor"] = t.error / floor if floor > 0 else math.nan
         t["pareto"] = pareto_front(t.wall_s, t.error)
         self.timing_noise = timing_noise(t)
+        self.repeat_identical = self.runs[-1]["observables"] == ref  # determinism: the same bits
         pick, self.within_floor = recommend(t, floor, self.accept, self.timing_noise)
         t["recommended"] = False
         t.loc[pick, "recommended"] = True
@@ -227,4 +240,4 @@ class TradeoffStudy:
         return ax
 
 
-__all__ = ["TradeoffStudy", "pareto_front", "run_observed"]
+__all__ = ["REPEAT", "TradeoffStudy", "pareto_front", "recommend", "run_observed", "tie_rule", "timing_noise"]

@@ -24,7 +24,8 @@ def study():
 
 def test_the_study_measures_error_and_cost_per_knob_value(study):
     t = study.table
-    assert list(t.run) == ["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "dt = 2.5e-06"]
+    assert list(t.run) == ["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "dt = 2.5e-06", "reference (repeat)"]
+    assert study.repeat_identical and t.error.iloc[-1] == 0.0  # the repeat, last, is the reference to the bit
     assert t.error.iloc[0] == 0.0 and 0 < study.floor_error < 1e-5
     errs = t[t.knob == "dt"].error.to_numpy()
     assert np.all(np.diff(errs) < 0)  # the error falls as Δt approaches the reference's
@@ -129,13 +130,20 @@ def test_a_tiny_study_with_fixed_parameters_two_knobs_and_an_observable_filter()
     run = case.run(p)
     s = run.extras["study"]
     t = s.table
-    assert list(t.run) == ["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "kn = 20000000.0"]
+    assert list(t.run) == ["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "kn = 20000000.0", "reference (repeat)"]
     assert s.reference == dict(t_end=0.05, dt=2.5e-6)
     assert (t.observables == 4).all()  # the four "vs exact linear-spring" checks of thesis-impact, not the rigid ones
     assert 0 < s.floor_error < 1e-5 and t.error.iloc[0] == 0.0
     checks = case.checks(run, p)
-    shrink = [c for c in checks if c.kind == "self-consistency"]
+    shrink = [c for c in checks if c.kind == "self-consistency" and not c.name.startswith("reference (repeat)")]
     assert len(shrink) == 1 and shrink[0].passed and shrink[0].name.startswith("dt:")  # kn is not a resolution knob
+    (repeat,) = [c for c in checks if c.name.startswith("reference (repeat)")]
+    assert repeat.kind == "self-consistency" and repeat.passed and repeat.value == 0.0
+    broken = copy.deepcopy(run)  # a repeat that differs (a nondeterministic run) fails the check
+    broken.extras["study"].repeat_identical = False
+    broken.extras["study"].table.loc[len(t) - 1, "error"] = 1e-9
+    (bad,) = [c for c in case.checks(broken, p) if c.name.startswith("reference (repeat)")]
+    assert not bad.passed and bad.value == 1e-9
     infos = [c.name for c in checks if c.kind == "info"]
     assert any(n.startswith("chaos floor: kn = 10001000.0") for n in infos)
     assert any(n.startswith("recommended:") for n in infos)
@@ -165,23 +173,23 @@ def test_a_resolution_knob_below_the_chaos_floor_fails_its_check_and_says_why():
 
     from demflow.cases.base import CaseRun
 
-    t = pd.DataFrame(dict(run=["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "kn = 2e7"],
-                          knob=["", "", "dt", "dt", "kn"], value=[None, None, 4e-5, 1e-5, 2e7],
-                          error=[0.0, 0.03, 0.02, 0.025, 0.5], wall_s=[4.0, 4.0, 1.0, 2.0, 4.0],
-                          recommended=[False, False, True, False, False]))
+    t = pd.DataFrame(dict(run=["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "kn = 2e7", "reference (repeat)"],
+                          knob=["", "", "dt", "dt", "kn", ""], value=[None, None, 4e-5, 1e-5, 2e7, None],
+                          error=[0.0, 0.03, 0.02, 0.025, 0.5, 0.0], wall_s=[4.0, 4.0, 1.0, 2.0, 4.0, 4.0],
+                          recommended=[False, False, True, False, False, False]))
     s = SimpleNamespace(table=t, floor={"kn": 1.0001e7}, floor_error=0.03, accept=2.0, within_floor=True,
-                        timing_noise=0.0, recommended=t.iloc[2].to_dict())
+                        timing_noise=0.0, repeat_identical=True, recommended=t.iloc[2].to_dict())
     case = TinyImpactStudy()
     checks = case.checks(CaseRun(extras={"study": s}), case.merged())
-    (dt,) = [c for c in checks if c.kind == "self-consistency"]
+    (dt,) = [c for c in checks if c.name.startswith("dt:")]
     assert not dt.passed and "not resolved above the chaos" in dt.name and dt.value == pytest.approx(1.25)
     t.loc[3, "error"] = 0.015  # shrinking, but within the floor: passed, with the note
     (dt,) = [c for c in TinyImpactStudy().checks(CaseRun(extras={"study": s}), case.merged())
-             if c.kind == "self-consistency"]
+             if c.name.startswith("dt:")]
     assert dt.passed and "not resolved above the chaos" in dt.name
     t.loc[3, "error"] = 0.2  # above the floor and growing: failed, without the note
     (dt,) = [c for c in TinyImpactStudy().checks(CaseRun(extras={"study": s}), case.merged())
-             if c.kind == "self-consistency"]
+             if c.name.startswith("dt:")]
     assert not dt.passed and "not resolved" not in dt.name
 
 
@@ -214,19 +222,21 @@ def test_falling_disc_without_its_dt_twin_observes_velocity_and_drag():
 
 
 def test_settings_as_cheap_as_the_timing_noise_says_are_tied_and_the_most_accurate_is_recommended():
-    """The chaos-floor run repeats the reference's work: the difference of their wall times is the host's noise, and
-    knob runs within it of the cheapest are equally cheap (the pick among three Δt settings within 8 % of each other
-    followed the host's noise from run to run)."""
+    """The reference runs again as the study's last run (the same work, the same bits): the difference of the two wall
+    times is the host's noise, and knob runs within it of the cheapest are equally cheap (the pick among three Δt
+    settings within 8 % of each other followed the host's noise from run to run)."""
     import pandas as pd
 
-    from demflow.tradeoff import recommend, timing_noise
+    from demflow.tradeoff import REPEAT, recommend, tie_rule, timing_noise
 
-    t = pd.DataFrame(dict(run=["reference", "chaos floor", "a", "b", "c", "d"], knob=["", "", "k", "k", "k", "k"],
-                          error=[0.0, 0.03, 0.05, 0.04, 0.02, 0.01], wall_s=[8.0, 8.8, 6.2, 6.5, 6.7, 9.0]))
-    assert timing_noise(t) == pytest.approx(0.1)
+    t = pd.DataFrame(dict(run=["reference", "chaos floor", "a", "b", "c", "d", REPEAT],
+                          knob=["", "", "k", "k", "k", "k", ""],
+                          error=[0.0, 0.03, 0.05, 0.04, 0.02, 0.01, 0.0], wall_s=[8.0, 5.0, 6.2, 6.5, 6.7, 9.0, 8.8]))
+    assert timing_noise(t) == pytest.approx(0.1)  # the repeat's 8.8 s against 8.0 s; the floor's time plays no part
     assert recommend(t, 0.03, 2.0, timing_noise(t)) == (4, True)  # a, b, c tie (within 10 % of 6.2): c, the most accurate
     assert recommend(t, 0.03, 2.0, 0.0) == (2, True)  # no noise: the cheapest, as before
     assert recommend(t, 0.03, 2.0, 0.05) == (3, True)  # 5 %: a and b tie
     assert recommend(t, 0.001, 2.0, 0.1) == (5, False)  # none within the floor: the most accurate
-    assert timing_noise(t[t.run != "chaos floor"]) == 0.0
-    assert timing_noise(t.assign(wall_s=[0.0, 8.8, 6.2, 6.5, 6.7, 9.0])) == 0.0  # no reference time: no noise measured
+    assert timing_noise(t[t.run != REPEAT]) == 0.0  # no repeat: no noise measured
+    assert timing_noise(t.assign(wall_s=[0.0, 5.0, 6.2, 6.5, 6.7, 9.0, 8.8])) == 0.0  # no reference time
+    assert "within 10% of the cheapest" in tie_rule(timing_noise(t))
