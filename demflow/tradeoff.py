@@ -38,15 +38,26 @@ import pandas as pd
 
 
 def _cost(run) -> dict:
-    """Particle-steps, DEM and fluid seconds of a CaseRun's results (those that record them)."""
+    """Particle-steps, DEM and fluid seconds of a CaseRun's results, summed over the results that record them; NaN
+    where none records it (a case whose results keep no step count shows no particle-steps/s, not 0).  The fluid
+    time is 0 where DEM time is recorded and fluid time is not (a dry case)."""
     steps = dem = bem = 0.0
+    has_steps = has_dem = has_bem = False
     for res in run.results.values():
         meta = getattr(res, "meta", {}) or {}
         n = meta.get("n_discs") or meta.get("n_spheres") or 0
-        steps += float(meta.get("steps", 0) or 0) * float(n)
-        dem += float(meta.get("dem_s", 0.0) or 0.0)
-        bem += float(meta.get("bem_s", meta.get("bem_seconds", 0.0)) or 0.0)
-    return dict(particle_steps=steps, dem_s=dem, bem_s=bem)
+        if meta.get("steps") and n:
+            steps += float(meta["steps"]) * float(n)
+            has_steps = True
+        if meta.get("dem_s") is not None:
+            dem += float(meta["dem_s"])
+            has_dem = True
+        b = meta.get("bem_s", meta.get("bem_seconds"))
+        if b is not None:
+            bem += float(b)
+            has_bem = True
+    return dict(particle_steps=steps if has_steps else math.nan, dem_s=dem if has_dem else math.nan,
+                bem_s=bem if (has_bem or has_dem) else math.nan)
 
 
 def run_observed(job) -> dict:
@@ -184,6 +195,7 @@ class TradeoffStudy:
             rows.append(dict(run=label, knob=knob or "", value=value, error=self.error(r["observables"], ref),
                              observables=self.compared(r["observables"], ref), wall_s=r["wall_s"],
                              particle_steps_per_s=(r["particle_steps"] / r["wall_s"]) if r["wall_s"] > 0 else math.nan,
+                             # NaN where the case's results record no step count (_cost)
                              dem_s=r["dem_s"], fluid_s=r["bem_s"]))
         t = pd.DataFrame(rows)
         t["value"] = pd.Series([r["value"] for r in rows], dtype=object)  # each knob's own type (int, float, str)

@@ -240,3 +240,21 @@ def test_settings_as_cheap_as_the_timing_noise_says_are_tied_and_the_most_accura
     assert timing_noise(t[t.run != REPEAT]) == 0.0  # no repeat: no noise measured
     assert timing_noise(t.assign(wall_s=[0.0, 5.0, 6.2, 6.5, 6.7, 9.0, 8.8])) == 0.0  # no reference time
     assert "within 10% of the cheapest" in tie_rule(timing_noise(t))
+
+
+def test_a_cost_the_results_do_not_record_is_nan_not_zero():
+    """The 3D uniaxial study's results keep no step count: its particle-steps/s showed 0 (and its DEM time 0 s), which
+    reads as a measured cost; unrecorded is NaN. A dry case's fluid time is 0 (DEM time recorded, no fluid time)."""
+    import math
+    from types import SimpleNamespace
+
+    from demflow.tradeoff import _cost
+
+    bare = SimpleNamespace(results={"seed1": SimpleNamespace(meta={"n_particles": 77})})
+    c = _cost(bare)
+    assert math.isnan(c["particle_steps"]) and math.isnan(c["dem_s"]) and math.isnan(c["bem_s"])
+    dry = SimpleNamespace(results={"a": SimpleNamespace(meta={"n_discs": 10, "steps": 100, "dem_s": 0.5}),
+                                   "b": SimpleNamespace(meta={"n_discs": 20, "steps": 50, "dem_s": 0.25})})
+    assert _cost(dry) == dict(particle_steps=2000.0, dem_s=0.75, bem_s=0.0)
+    wet = SimpleNamespace(results={"a": SimpleNamespace(meta={"n_discs": 3, "steps": 10, "dem_s": 0.1, "bem_seconds": 2.0})})
+    assert _cost(wet) == dict(particle_steps=30.0, dem_s=0.1, bem_s=2.0)
