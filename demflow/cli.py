@@ -277,7 +277,8 @@ def main(argv=None):
 
         save_figure(fig, str(out / "tradeoff.png"))
         print(t.to_string(index=False))
-        print(f"recommended: {study.recommended['run']}. {tie_rule(study.timing_noise)} Table and figure in {out}")
+        print(f"recommended: {study.recommended['run']}. {tie_rule(study.timing_noise, study.cost)} Table and figure in "
+              f"{out}")
         return 0
     if args.cmd == "sweep":
         from .sweep import case_sweep

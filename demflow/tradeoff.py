@@ -12,9 +12,13 @@ A :class:`TradeoffStudy` (freud-like: configure, ``compute()`` returns ``self``,
 Observables are the case's own check values (every finite, non-informative check: what the case
 claims to reproduce), or what its ``observables`` hook returns (e.g. a curve sampled on a grid), kept
 to the names containing one of ``observables`` when that is given.  A run's *error* is the root mean square over observables of
-|v − v_ref| / max(|v_ref|, scale), where ``scale`` guards zero references; its *cost* is the wall
-time and the particle-steps per second (from each result's steps and particle count), with the
-simulation time split into DEM and fluid (BEM) time where the results record them.  Runs go through
+|v − v_ref| / max(|v_ref|, scale), where ``scale`` guards zero references; what a run costs is recorded as its
+wall time and particle-steps per second (from each result's steps and particle count), with the
+simulation time split into DEM and fluid (BEM) time where the results record them.  Settings are compared by
+their *cost*: the simulation time (DEM + fluid, or a protocol's own compute time) when every run records it, else
+the wall time; the wall time adds what a knob does not change (building a packing, the analysis) and with it only
+the host's noise (the photoelastic study's Δt 0.1 run took 7.8 s of wall time and 0.91 s of DEM time, its Δt 0.05
+run 6.8 s and 1.82 s, README).  Runs go through
 :func:`demflow.sweep.run_sweep` (serial by default, a Dask cluster on request).
 
 The table marks the Pareto front (no other run is both cheaper and more accurate) and the
@@ -22,7 +26,7 @@ The table marks the Pareto front (no other run is both cheaper and more accurate
 indistinguishable from the reference up to the floor's own noise), the most accurate of the cheapest, or the most
 accurate knob setting when none is within it (``within_floor`` says which).  "Cheapest" is judged against the
 timing's own noise (:func:`timing_noise`): the reference runs once more as the study's last run (the same work, the
-same bits: determinism), and the settings whose wall time is within the two reference runs' relative difference of
+same bits: determinism), and the settings whose cost is within the two reference runs' relative difference of
 the cheapest one's are equally cheap (:func:`recommend`), so that the pick does not follow the host's noise from run
 to run (it did: the photoelastic study's three Δt settings, 6.2-6.7 s of wall time in one run, picked 0.1, 0.07 or
 0.05 over ten runs, README).  With ``warmup`` one untimed run compiles
@@ -40,9 +44,10 @@ import pandas as pd
 def _cost(run) -> dict:
     """Particle-steps, DEM and fluid seconds of a CaseRun's results, summed over the results that record them; NaN
     where none records it (a case whose results keep no step count shows no particle-steps/s, not 0).  The fluid
-    time is 0 where DEM time is recorded and fluid time is not (a dry case)."""
-    steps = dem = bem = 0.0
-    has_steps = has_dem = has_bem = False
+    time is 0 where DEM time is recorded and fluid time is not (a dry case).  ``sim_s``, the time spent simulating:
+    DEM + fluid where recorded, else the sum of a protocol's own ``compute_s`` (the 3D uniaxial case), else NaN."""
+    steps = dem = bem = comp = 0.0
+    has_steps = has_dem = has_bem = has_comp = False
     for res in run.results.values():
         meta = getattr(res, "meta", {}) or {}
         n = meta.get("n_discs") or meta.get("n_spheres") or 0
@@ -56,8 +61,13 @@ def _cost(run) -> dict:
         if b is not None:
             bem += float(b)
             has_bem = True
-    return dict(particle_steps=steps if has_steps else math.nan, dem_s=dem if has_dem else math.nan,
-                bem_s=bem if (has_bem or has_dem) else math.nan)
+        if meta.get("compute_s") is not None:
+            comp += float(meta["compute_s"])
+            has_comp = True
+    bem = bem if (has_bem or has_dem) else math.nan
+    sim = (dem + bem) if has_dem else (bem if has_bem else (comp if has_comp else math.nan))
+    return dict(particle_steps=steps if has_steps else math.nan, dem_s=dem if has_dem else math.nan, bem_s=bem,
+                sim_s=sim)
 
 
 def run_observed(job) -> dict:
@@ -77,35 +87,40 @@ def run_observed(job) -> dict:
 REPEAT = "reference (repeat)"
 
 
-def timing_noise(table: pd.DataFrame) -> float:
-    """How far apart the wall times of two runs doing the same work are in this study: the reference runs first and
-    once more last (the repeat: the same parameters, the same steps, the same bits), so |t_repeat - t_ref| / t_ref is
-    the host's noise between two runs of the study, over the study's whole duration.  0 without a repeat run or a
-    reference time."""
-    ref = table[table.run == "reference"].wall_s
-    rep = table[table.run == REPEAT].wall_s
+def timing_noise(table: pd.DataFrame, cost: str = "wall_s") -> float:
+    """How far apart the costs (column ``cost``: seconds) of two runs doing the same work are in this study: the
+    reference runs first and once more last (the repeat: the same parameters, the same steps, the same bits), so
+    |t_repeat - t_ref| / t_ref is the host's noise between two runs of the study, over the study's whole duration.
+    0 without a repeat run or a reference time."""
+    ref = table[table.run == "reference"][cost]
+    rep = table[table.run == REPEAT][cost]
     if ref.empty or rep.empty or not float(ref.iloc[0]) > 0:
         return 0.0
     return abs(float(rep.iloc[0]) - float(ref.iloc[0])) / float(ref.iloc[0])
 
 
-def tie_rule(noise: float) -> str:
+COST_BASIS = {"sim_s": "simulation time", "wall_s": "wall time"}
+
+
+def tie_rule(noise: float, cost: str = "wall_s") -> str:
     """The sentence that says how the recommendation treats the timing noise (the page and ``demflow tradeoff``)."""
-    return (f"Wall times within {noise:.0%} of the cheapest count as equally cheap (the reference run and its repeat, "
-            "the study's first and last runs, differ by that much: the host's noise), and the most accurate of those "
-            "is recommended.")
+    what = COST_BASIS[cost]
+    return (f"Settings are compared by {what}; {what}s within {noise:.0%} of the cheapest count as equally cheap (the "
+            "reference run and its repeat, the study's first and last runs, differ by that much: the host's noise), "
+            "and the most accurate of those is recommended.")
 
 
-def recommend(table: pd.DataFrame, floor_error: float, accept: float, noise: float) -> tuple[int, bool]:
+def recommend(table: pd.DataFrame, floor_error: float, accept: float, noise: float,
+              cost: str = "wall_s") -> tuple[int, bool]:
     """(row index of the recommended knob run, whether it is within the floor): among the knob runs whose error is
-    within ``accept`` × ``floor_error``, those whose wall time is within ``noise`` (relative) of the cheapest are
+    within ``accept`` × ``floor_error``, those whose cost (column ``cost``) is within ``noise`` (relative) of the cheapest are
     equally cheap, and the most accurate of them is picked; when none is within the floor, the most accurate knob
     run."""
     knobs = table[table.knob != ""]
     ok = knobs[knobs.error <= accept * floor_error]
     if not len(ok):
         return knobs.error.idxmin(), False
-    tied = ok[ok.wall_s <= ok.wall_s.min() * (1.0 + noise)]
+    tied = ok[ok[cost] <= ok[cost].min() * (1.0 + noise)]
     return tied.error.idxmin(), True
 
 
@@ -196,15 +211,17 @@ class TradeoffStudy:
                              observables=self.compared(r["observables"], ref), wall_s=r["wall_s"],
                              particle_steps_per_s=(r["particle_steps"] / r["wall_s"]) if r["wall_s"] > 0 else math.nan,
                              # NaN where the case's results record no step count (_cost)
-                             dem_s=r["dem_s"], fluid_s=r["bem_s"]))
+                             dem_s=r["dem_s"], fluid_s=r["bem_s"], sim_s=r["sim_s"]))
         t = pd.DataFrame(rows)
         t["value"] = pd.Series([r["value"] for r in rows], dtype=object)  # each knob's own type (int, float, str)
         floor = float(t.loc[t.run == "chaos floor", "error"].iloc[0]) if self.floor else 0.0
         t["error_over_floor"] = t.error / floor if floor > 0 else math.nan
-        t["pareto"] = pareto_front(t.wall_s, t.error)
-        self.timing_noise = timing_noise(t)
+        # the cost compared: the simulation time when every run records it (module docstring), else the wall time
+        self.cost = "sim_s" if bool((t.sim_s > 0).all()) else "wall_s"
+        t["pareto"] = pareto_front(t[self.cost], t.error)
+        self.timing_noise = timing_noise(t, self.cost)
+        pick, self.within_floor = recommend(t, floor, self.accept, self.timing_noise, self.cost)
         self.repeat_identical = self.runs[-1]["observables"] == ref  # determinism: the same bits
-        pick, self.within_floor = recommend(t, floor, self.accept, self.timing_noise)
         t["recommended"] = False
         t.loc[pick, "recommended"] = True
         self.floor_error = floor
@@ -219,8 +236,8 @@ class TradeoffStudy:
         return self.table[self.table.recommended].iloc[0].to_dict()
 
     def plot(self, ax=None):
-        """Error against wall time, one marker per run, the Pareto front joined, the chaos floor as a
-        band, the recommended run ringed."""
+        """Error against the cost compared (simulation or wall time), one marker per run, the Pareto front joined,
+        the chaos floor as a band, the recommended run ringed."""
         import matplotlib.pyplot as plt
 
         if self.table is None:
@@ -232,20 +249,20 @@ class TradeoffStudy:
         err = t.error.clip(lower=tiny)
         for knob in t.knob.unique():
             s = t[t.knob == knob]
-            ax.scatter(s.wall_s, err[s.index], label=knob or "reference / floor", zorder=3)
+            ax.scatter(s[self.cost], err[s.index], label=knob or "reference / floor / repeat", zorder=3)
             for _, r in s.iterrows():
-                ax.annotate(str(r.value) if knob else r.run, (r.wall_s, err[r.name]), fontsize=7,
+                ax.annotate(str(r.value) if knob else r.run, (r[self.cost], err[r.name]), fontsize=7,
                             xytext=(3, 3), textcoords="offset points")
-        front = t[t.pareto].sort_values("wall_s")
-        ax.plot(front.wall_s, err[front.index], "k--", lw=0.8, label="Pareto front")
+        front = t[t.pareto].sort_values(self.cost)
+        ax.plot(front[self.cost], err[front.index], "k--", lw=0.8, label="Pareto front")
         if self.floor_error > 0:
             ax.axhspan(tiny, self.accept * self.floor_error, color="0.85", zorder=0,
                        label=f"≤ {self.accept:g} × chaos floor")
         rec = t[t.recommended]
-        ax.scatter(rec.wall_s, err[rec.index], s=160, facecolors="none", edgecolors="r", label="recommended")
+        ax.scatter(rec[self.cost], err[rec.index], s=160, facecolors="none", edgecolors="r", label="recommended")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("wall time [s]")
+        ax.set_xlabel(f"{COST_BASIS[self.cost]} [s]")
         ax.set_ylabel("rms relative error of the observables vs the reference")
         ax.set_title(f"{self.case}: speed vs accuracy", fontsize=9)
         ax.legend(fontsize=7)

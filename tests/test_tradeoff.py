@@ -26,6 +26,8 @@ def test_the_study_measures_error_and_cost_per_knob_value(study):
     t = study.table
     assert list(t.run) == ["reference", "chaos floor", "dt = 4e-05", "dt = 1e-05", "dt = 2.5e-06", "reference (repeat)"]
     assert study.repeat_identical and t.error.iloc[-1] == 0.0  # the repeat, last, is the reference to the bit
+    # thesis-impact records its DEM time: settings are compared by simulation time, which every run has
+    assert study.cost == "sim_s" and np.all(t.sim_s > 0) and np.all(t.sim_s <= t.wall_s)
     assert t.error.iloc[0] == 0.0 and 0 < study.floor_error < 1e-5
     errs = t[t.knob == "dt"].error.to_numpy()
     assert np.all(np.diff(errs) < 0)  # the error falls as Δt approaches the reference's
@@ -178,7 +180,7 @@ def test_a_resolution_knob_below_the_chaos_floor_fails_its_check_and_says_why():
                           error=[0.0, 0.03, 0.02, 0.025, 0.5, 0.0], wall_s=[4.0, 4.0, 1.0, 2.0, 4.0, 4.0],
                           recommended=[False, False, True, False, False, False]))
     s = SimpleNamespace(table=t, floor={"kn": 1.0001e7}, floor_error=0.03, accept=2.0, within_floor=True,
-                        timing_noise=0.0, repeat_identical=True, recommended=t.iloc[2].to_dict())
+                        timing_noise=0.0, repeat_identical=True, cost="wall_s", recommended=t.iloc[2].to_dict())
     case = TinyImpactStudy()
     checks = case.checks(CaseRun(extras={"study": s}), case.merged())
     (dt,) = [c for c in checks if c.name.startswith("dt:")]
@@ -252,9 +254,28 @@ def test_a_cost_the_results_do_not_record_is_nan_not_zero():
 
     bare = SimpleNamespace(results={"seed1": SimpleNamespace(meta={"n_particles": 77})})
     c = _cost(bare)
-    assert math.isnan(c["particle_steps"]) and math.isnan(c["dem_s"]) and math.isnan(c["bem_s"])
+    assert all(math.isnan(c[k]) for k in ("particle_steps", "dem_s", "bem_s", "sim_s"))
     dry = SimpleNamespace(results={"a": SimpleNamespace(meta={"n_discs": 10, "steps": 100, "dem_s": 0.5}),
                                    "b": SimpleNamespace(meta={"n_discs": 20, "steps": 50, "dem_s": 0.25})})
-    assert _cost(dry) == dict(particle_steps=2000.0, dem_s=0.75, bem_s=0.0)
+    assert _cost(dry) == dict(particle_steps=2000.0, dem_s=0.75, bem_s=0.0, sim_s=0.75)
     wet = SimpleNamespace(results={"a": SimpleNamespace(meta={"n_discs": 3, "steps": 10, "dem_s": 0.1, "bem_seconds": 2.0})})
-    assert _cost(wet) == dict(particle_steps=30.0, dem_s=0.1, bem_s=2.0)
+    assert _cost(wet) == dict(particle_steps=30.0, dem_s=0.1, bem_s=2.0, sim_s=2.1)
+    protocol = SimpleNamespace(results={"seed1": SimpleNamespace(meta={"n_particles": 77, "compute_s": 12.5})})
+    assert math.isnan(_cost(protocol)["dem_s"]) and _cost(protocol)["sim_s"] == 12.5  # the 3D uniaxial case's own time
+
+
+def test_settings_are_compared_by_simulation_time_where_every_run_records_it():
+    """The photoelastic study's wall times carry the packing and the analysis, which no knob changes: its Δt 0.1 run
+    took 7.8 s of wall time against 6.8 s for Δt 0.05 while simulating 0.91 s against 1.82 s. By simulation time the
+    pick follows the work; a table without it falls back to wall time."""
+    import pandas as pd
+
+    from demflow.tradeoff import REPEAT, recommend, tie_rule, timing_noise
+
+    t = pd.DataFrame(dict(run=["reference", "chaos floor", "0.1", "0.07", "0.05", REPEAT], knob=["", "", "k", "k", "k", ""],
+                          error=[0.0, 0.031, 0.0196, 0.0246, 0.0263, 0.0],
+                          wall_s=[8.53, 9.23, 7.81, 6.84, 6.77, 8.35], sim_s=[3.61, 3.72, 0.91, 1.35, 1.82, 3.56]))
+    assert timing_noise(t, "sim_s") == pytest.approx(0.05 / 3.61)
+    assert recommend(t, 0.031, 2.0, timing_noise(t, "sim_s"), "sim_s") == (2, True)  # Δt 0.1: the least work
+    assert recommend(t, 0.031, 2.0, timing_noise(t), "wall_s") == (3, True)  # by wall time 0.07 and 0.05 tie: 0.07
+    assert tie_rule(0.014, "sim_s").startswith("Settings are compared by simulation time; simulation times within 1%")

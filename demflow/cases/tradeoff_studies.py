@@ -23,7 +23,7 @@ Each study's checks are self-consistency: along a resolution knob the error must
 reference at every refinement (a knob whose error does not shrink is not what limits the result, or
 the study is wrong: it shows as a failed check; a check whose errors all lie within ``accept`` × the
 chaos floor says so, passed or failed); the reference runs once more as the study's last run and must give
-the same observables to the bit (self-consistency: determinism; the two runs' wall times are the study's timing
+the same observables to the bit (self-consistency: determinism; the two runs' costs give the study's timing
 noise, :func:`demflow.tradeoff.timing_noise`); the chaos floor and the recommended setting are reported
 (informative).
 """
@@ -31,6 +31,13 @@ from __future__ import annotations
 
 from ..tradeoff import REPEAT, tie_rule
 from .base import Case, CaseRun, Check
+
+
+def _took(row, cost: str) -> str:
+    """A run's time for the page's text: its wall time, and the simulation time where that is the cost compared."""
+    if cost == "sim_s":
+        return f"{row['wall_s']:.3g} s ({row['sim_s']:.3g} s simulating)"
+    return f"{row['wall_s']:.3g} s"
 
 
 def typed(text, default):
@@ -160,22 +167,22 @@ class TradeoffCase(Case):
             out.append(Check.info(f"chaos floor: {', '.join(f'{k} = {v}' for k, v in s.floor.items())} on top of the "
                                   f"reference (error {s.floor_error:.3g})", s.floor_error,
                                   self.source, "How far a physically irrelevant change moves the observables: a knob's "
-                                  f"error is only meaningful above it. Its run took {fl.wall_s:.3g} s."))
+                                  f"error is only meaningful above it. Its run took {_took(fl, s.cost)}."))
         rep = t[t.run == REPEAT].iloc[0]
         out.append(Check.condition(
             "reference (repeat): the reference run once more as the study's last run gives the same observables to "
             "the bit (value: its error against the reference)", s.repeat_identical, float(rep.error), self.source,
             "Determinism (same scene, same parameters, same bits): the repeat measures the host's timing noise over the "
-            f"study and nothing else. Its run took {rep.wall_s:.3g} s, the reference's "
-            f"{float(t[t.run == 'reference'].wall_s.iloc[0]):.3g} s.", kind="self-consistency"))
+            f"study and nothing else. Its run took {_took(rep, s.cost)}, the reference's "
+            f"{_took(t[t.run == 'reference'].iloc[0], s.cost)}.", kind="self-consistency"))
         rec = s.recommended
         why = (f"the most accurate of the equally cheap within {s.accept:g} × the chaos floor {s.floor_error:.3g}"
                if s.within_floor else
                f"none is within {s.accept:g} × the chaos floor {s.floor_error:.3g}: the most accurate")
-        tie = " " + tie_rule(s.timing_noise) if s.within_floor else ""
+        tie = " " + tie_rule(s.timing_noise, s.cost) if s.within_floor else ""
         out.append(Check.info(f"recommended: {rec['run']} (error {rec['error']:.3g}; {why})", rec["error"], self.source,
                               f"The recommendation, not a pass/fail: see the figure and the table. Its run took "
-                              f"{rec['wall_s']:.3g} s.{tie}"))
+                              f"{_took(rec, s.cost)}.{tie}"))
         return out
 
     def tables(self, run, p):
