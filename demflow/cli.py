@@ -123,7 +123,8 @@ def build_parser() -> argparse.ArgumentParser:
                         formatter_class=fmt,
                         description="Run a case at a reference setting, at a chaos floor (the reference with an "
                                     "irrelevant change) and once per value of each knob; write the knob table "
-                                    "(error of the case's observables vs the reference, wall time, particle-steps/s, "
+                                    "(error of the case's observables vs the reference, wall and simulation time, "
+                                    "particle-steps/s of the time compared, "
                                     "Pareto front, recommended setting) and the error-vs-cost figure.\n\nexample:\n"
                                     "  demflow tradeoff thesis-impact --knob dt=4e-5,2e-5,1e-5 --reference dt=1e-6 "
                                     "--floor kn=1.0001e7")

@@ -13,15 +13,16 @@ Observables are the case's own check values (every finite, non-informative check
 claims to reproduce), or what its ``observables`` hook returns (e.g. a curve sampled on a grid), kept
 to the names containing one of ``observables`` when that is given.  A run's *error* is the root mean square over observables of
 |v − v_ref| / max(|v_ref|, scale), where ``scale`` guards zero references; what a run costs is recorded as its
-wall time and particle-steps per second (from each result's steps and particle count), with the
-simulation time split into DEM and fluid (BEM) time where the results record them.  Settings are compared by
+wall time, its particle-steps (from each result's steps and particle count) and particle-steps per second of the
+cost compared (below), with the simulation time split into DEM and fluid (BEM) time where the results record them.  Settings are compared by
 their *cost*: the simulation time (DEM + fluid, or a protocol's own compute time) when every run records it, else
 the wall time; the wall time adds what a knob does not change (building a packing, the analysis) and with it only
 the host's noise (the photoelastic study's Δt 0.1 run took 7.8 s of wall time and 0.91 s of DEM time, its Δt 0.05
 run 6.8 s and 1.82 s, README).  Runs go through
 :func:`demflow.sweep.run_sweep` (serial by default, a Dask cluster on request).
 
-The table marks the Pareto front (no other run is both cheaper and more accurate) and the
+The table marks the Pareto front of the settings (no other run is both cheaper and more accurate; the repeat of
+the reference is left out: it is the timing's check, not a setting) and the
 *recommended* setting: among the knob settings whose error is within ``accept`` × the chaos floor (default 2:
 indistinguishable from the reference up to the floor's own noise), the most accurate of the cheapest, or the most
 accurate knob setting when none is within it (``within_floor`` says which).  "Cheapest" is judged against the
@@ -43,7 +44,9 @@ import pandas as pd
 
 def _cost(run) -> dict:
     """Particle-steps, DEM and fluid seconds of a CaseRun's results, summed over the results that record them; NaN
-    where none records it (a case whose results keep no step count shows no particle-steps/s, not 0).  The fluid
+    where none records it (a case whose results keep no step count shows no particle-steps/s, not 0).  A result's
+    particle-steps are its ``particle_steps`` where it states them (a protocol whose stages have different particle
+    counts), else its steps × its discs or spheres.  The fluid
     time is 0 where DEM time is recorded and fluid time is not (a dry case).  ``sim_s``, the time spent simulating:
     DEM + fluid where recorded, else the sum of a protocol's own ``compute_s`` (the 3D uniaxial case), else NaN."""
     steps = dem = bem = comp = 0.0
@@ -51,7 +54,10 @@ def _cost(run) -> dict:
     for res in run.results.values():
         meta = getattr(res, "meta", {}) or {}
         n = meta.get("n_discs") or meta.get("n_spheres") or 0
-        if meta.get("steps") and n:
+        if meta.get("particle_steps"):  # a protocol of stages with their own particle counts (the 3D uniaxial case)
+            steps += float(meta["particle_steps"])
+            has_steps = True
+        elif meta.get("steps") and n:
             steps += float(meta["steps"]) * float(n)
             has_steps = True
         if meta.get("dem_s") is not None:
@@ -108,6 +114,14 @@ def tie_rule(noise: float, cost: str = "wall_s") -> str:
     return (f"Settings are compared by {what}; {what}s within {noise:.0%} of the cheapest count as equally cheap (the "
             "reference run and its repeat, the study's first and last runs, differ by that much: the host's noise), "
             "and the most accurate of those is recommended.")
+
+
+def took(row, cost: str = "wall_s") -> str:
+    """A run's time as the page and ``demflow tradeoff`` state it: its wall time, and the simulation time where that
+    is the cost compared."""
+    if cost == "sim_s":
+        return f"{row['wall_s']:.3g} s ({row['sim_s']:.3g} s simulating)"
+    return f"{row['wall_s']:.3g} s"
 
 
 def recommend(table: pd.DataFrame, floor_error: float, accept: float, noise: float,
@@ -209,8 +223,7 @@ class TradeoffStudy:
         for (label, knob, value, over), r in zip(jobs, self.runs):
             rows.append(dict(run=label, knob=knob or "", value=value, error=self.error(r["observables"], ref),
                              observables=self.compared(r["observables"], ref), wall_s=r["wall_s"],
-                             particle_steps_per_s=(r["particle_steps"] / r["wall_s"]) if r["wall_s"] > 0 else math.nan,
-                             # NaN where the case's results record no step count (_cost)
+                             particle_steps=r["particle_steps"],  # NaN where the results record no step count (_cost)
                              dem_s=r["dem_s"], fluid_s=r["bem_s"], sim_s=r["sim_s"]))
         t = pd.DataFrame(rows)
         t["value"] = pd.Series([r["value"] for r in rows], dtype=object)  # each knob's own type (int, float, str)
@@ -218,7 +231,12 @@ class TradeoffStudy:
         t["error_over_floor"] = t.error / floor if floor > 0 else math.nan
         # the cost compared: the simulation time when every run records it (module docstring), else the wall time
         self.cost = "sim_s" if bool((t.sim_s > 0).all()) else "wall_s"
-        t["pareto"] = pareto_front(t[self.cost], t.error)
+        # particle-steps per second of that cost: the speed of the simulation itself where the runs record its time
+        t["particle_steps_per_s"] = t.particle_steps / t[self.cost].where(t[self.cost] > 0)
+        # the front of the settings: the repeat is the reference's timing check, not a setting of its own
+        t["pareto"] = False
+        settings = t.run != REPEAT
+        t.loc[settings, "pareto"] = pareto_front(t.loc[settings, self.cost], t.loc[settings, "error"])
         self.timing_noise = timing_noise(t, self.cost)
         pick, self.within_floor = recommend(t, floor, self.accept, self.timing_noise, self.cost)
         self.repeat_identical = self.runs[-1]["observables"] == ref  # determinism: the same bits
@@ -269,4 +287,4 @@ class TradeoffStudy:
         return ax
 
 
-__all__ = ["REPEAT", "TradeoffStudy", "pareto_front", "recommend", "run_observed", "tie_rule", "timing_noise"]
+__all__ = ["REPEAT", "TradeoffStudy", "pareto_front", "recommend", "run_observed", "tie_rule", "timing_noise", "took"]

@@ -107,6 +107,7 @@ def test_an_interrupted_protocol_resumes_from_its_checkpoints_to_the_bit(tmp_pat
     monkeypatch.setattr(Simulation3D, "run", real)
     resumed = _protocol(p)
     assert resumed["settle_steps"] == whole["settle_steps"]
+    assert resumed["particle_steps"] == whole["particle_steps"]  # the work of every stage, resumed or not
     cols = [c for c in whole["curve"].columns]
     np.testing.assert_array_equal(resumed["curve"][cols].to_numpy(), whole["curve"][cols].to_numpy())
     np.testing.assert_array_equal(resumed["bed"]["pos"], whole["bed"]["pos"])
@@ -122,6 +123,25 @@ def test_an_interrupted_protocol_resumes_from_its_checkpoints_to_the_bit(tmp_pat
     # 1e-4 apart from what a re-rendered page then showed)
     stored = m.ProtocolCheckpoints(str(tmp_path), p).load("compute_s")
     assert again["compute_s"] == stored == _protocol(p)["compute_s"] == resumed["compute_s"] and stored > 0.0
+
+
+def test_the_protocol_counts_the_particle_steps_of_every_stage(monkeypatch):
+    """The trade-off study's particle-steps/s of this case: the clumps × steps of each stage (the trimmed bed has fewer
+    clumps than the inserted one), counted here at every call of the step loop."""
+    from demflow.simulation3d import Simulation3D
+
+    real = Simulation3D.run
+    done = {"particle_steps": 0, "stages": set()}
+
+    def counting(self, n_steps, *a, **k):
+        done["particle_steps"] += len(self.bodies.mass) * int(n_steps)
+        done["stages"].add(len(self.bodies.mass))
+        return real(self, n_steps, *a, **k)
+
+    monkeypatch.setattr(Simulation3D, "run", counting)
+    out = _protocol(_small())
+    assert len(done["stages"]) == 2  # 12 inserted, fewer after trimming
+    assert out["particle_steps"] == done["particle_steps"] > 0
 
 
 def test_checkpoints_of_other_parameters_are_not_resumed(tmp_path):

@@ -262,6 +262,44 @@ def test_a_cost_the_results_do_not_record_is_nan_not_zero():
     assert _cost(wet) == dict(particle_steps=30.0, dem_s=0.1, bem_s=2.0, sim_s=2.1)
     protocol = SimpleNamespace(results={"seed1": SimpleNamespace(meta={"n_particles": 77, "compute_s": 12.5})})
     assert math.isnan(_cost(protocol)["dem_s"]) and _cost(protocol)["sim_s"] == 12.5  # the 3D uniaxial case's own time
+    # a protocol that states its particle-steps (stages with their own particle counts) is counted by them
+    staged = SimpleNamespace(results={"seed1": SimpleNamespace(meta={"n_particles": 77, "compute_s": 12.5,
+                                                                     "particle_steps": 1234567})})
+    assert _cost(staged)["particle_steps"] == 1234567.0
+
+
+def test_the_repeat_is_not_a_setting_on_the_pareto_front():
+    """The repeat of the reference is the timing's check: with a cost below the reference's and the same error it
+    would dominate the reference on the front. The front is of the settings only; particle-steps/s are per second of
+    the cost compared."""
+    from demflow.tradeoff import REPEAT, TradeoffStudy
+
+    study = TradeoffStudy.__new__(TradeoffStudy)
+    study.floor = {"kn": 1.0}
+    study.accept = 2.0
+    study.scale = 1e-12
+    study.observables = None
+    study.knobs = {"dt": [2.0, 1.0]}
+    study.reference = {}
+    runs = [dict(observables={"a": 1.0}, wall_s=10.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
+            dict(observables={"a": 1.01}, wall_s=10.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
+            dict(observables={"a": 1.1}, wall_s=6.0, particle_steps=500.0, dem_s=2.0, bem_s=0.0, sim_s=2.0),
+            dict(observables={"a": 1.02}, wall_s=8.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
+            dict(observables={"a": 1.0}, wall_s=9.0, particle_steps=1000.0, dem_s=3.9, bem_s=0.0, sim_s=3.9)]
+    import demflow.sweep as sweep
+
+    saved = sweep.run_sweep
+    sweep.run_sweep = lambda f, jobs, **kw: runs
+    try:
+        study.warmup = False
+        study.scheduler, study.workers = "serial", None
+        study.case = "thesis-impact"
+        t = study.compute().table
+    finally:
+        sweep.run_sweep = saved
+    assert t.run.tolist()[-1] == REPEAT and not t.pareto.iloc[-1]  # cheaper than the reference, same error: not on it
+    assert t.pareto.iloc[0]  # the reference (error 0) is on the front of the settings
+    assert t.particle_steps_per_s.tolist() == [250.0, 250.0, 250.0, 250.0, 1000.0 / 3.9]  # per simulation second
 
 
 def test_settings_are_compared_by_simulation_time_where_every_run_records_it():

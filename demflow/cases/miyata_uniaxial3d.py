@@ -143,7 +143,8 @@ class MiyataUniaxial3D(Case):
         # micro-state columns, snapshots.parquet, uniaxial.json)
         mine = UniaxialRun.from_case(runs[0])
         mine.curve = runs[0]["curve"].copy()
-        mine.meta.update(seed=seeds[0], compute_s=float(runs[0]["compute_s"]))
+        mine.meta.update(seed=seeds[0], compute_s=float(runs[0]["compute_s"]),
+                         particle_steps=int(runs[0]["particle_steps"]))
         return CaseRun({f"seed{seeds[0]}": mine}, extras)
 
     engines = ("yade", "liggghts")
@@ -440,6 +441,8 @@ class MiyataUniaxial3D(Case):
         c = ex["curve"]
         rows = [{"particles": ex["n_particles"], "settle steps (insert, trimmed)": str(ex["settle_steps"]),
                  "compute time of the protocol [s]": round(float(ex.get("compute_s", math.nan)), 1),
+                 "particle-steps (all stages)": int(ex["particle_steps"]),
+                 "particle-steps/s": float(f"{ex['particle_steps'] / ex['compute_s']:.3g}") if ex.get("compute_s") else math.nan,
                  "Δt [s]": ex["dt"], "loading steps": int(c.step.iloc[-1]),
                  "final plate stress [kPa]": c.plate_stress.iloc[-1] / 1e3,
                  "final settlement [mm]": c.settlement.iloc[-1] * 1e3}]

@@ -394,10 +394,12 @@ def protocol_run(p) -> dict:
                 last_ckpt = s3.step
                 ck.mark_time()
     sp = s3.spheres
+    # the work done: particles (clumps or ellipsoids) × steps, over the three stages (the trimmed bed has fewer)
+    particle_steps = len(s1.bodies.mass) * s1.step + n_particles * (s2.step + s3.step)
     bed = {"pos": sp.pos.copy(), "r": sp.r.copy(), "body": sp.body.copy(), "plate_z": float(s3.planes.point[1, 2]),
            "box": float(p["box"])}
     out = {"curve": pd.DataFrame(st["rows"]), "snapshots": st["snaps"], "weight": weight,
            "floor_settled": floor_settled, "n_particles": n_particles, "area": A, "settle_steps": (steps1, steps2),
-           "dt": s3.dt, "plate_start": z0, "seed": seed, "bed": bed,
+           "dt": s3.dt, "plate_start": z0, "seed": seed, "bed": bed, "particle_steps": int(particle_steps),
            "compute_s": ck.finish() if ck is not None else time.perf_counter() - t_start}
     return out

@@ -29,15 +29,8 @@ noise, :func:`demflow.tradeoff.timing_noise`); the chaos floor and the recommend
 """
 from __future__ import annotations
 
-from ..tradeoff import REPEAT, tie_rule
+from ..tradeoff import REPEAT, tie_rule, took
 from .base import Case, CaseRun, Check
-
-
-def _took(row, cost: str) -> str:
-    """A run's time for the page's text: its wall time, and the simulation time where that is the cost compared."""
-    if cost == "sim_s":
-        return f"{row['wall_s']:.3g} s ({row['sim_s']:.3g} s simulating)"
-    return f"{row['wall_s']:.3g} s"
 
 
 def typed(text, default):
@@ -167,14 +160,14 @@ class TradeoffCase(Case):
             out.append(Check.info(f"chaos floor: {', '.join(f'{k} = {v}' for k, v in s.floor.items())} on top of the "
                                   f"reference (error {s.floor_error:.3g})", s.floor_error,
                                   self.source, "How far a physically irrelevant change moves the observables: a knob's "
-                                  f"error is only meaningful above it. Its run took {_took(fl, s.cost)}."))
+                                  f"error is only meaningful above it. Its run took {took(fl, s.cost)}."))
         rep = t[t.run == REPEAT].iloc[0]
         out.append(Check.condition(
             "reference (repeat): the reference run once more as the study's last run gives the same observables to "
             "the bit (value: its error against the reference)", s.repeat_identical, float(rep.error), self.source,
             "Determinism (same scene, same parameters, same bits): the repeat measures the host's timing noise over the "
-            f"study and nothing else. Its run took {_took(rep, s.cost)}, the reference's "
-            f"{_took(t[t.run == 'reference'].iloc[0], s.cost)}.", kind="self-consistency"))
+            f"study and nothing else. Its run took {took(rep, s.cost)}, the reference's "
+            f"{took(t[t.run == 'reference'].iloc[0], s.cost)}.", kind="self-consistency"))
         rec = s.recommended
         why = (f"the most accurate of the equally cheap within {s.accept:g} × the chaos floor {s.floor_error:.3g}"
                if s.within_floor else
@@ -182,7 +175,7 @@ class TradeoffCase(Case):
         tie = " " + tie_rule(s.timing_noise, s.cost) if s.within_floor else ""
         out.append(Check.info(f"recommended: {rec['run']} (error {rec['error']:.3g}; {why})", rec["error"], self.source,
                               f"The recommendation, not a pass/fail: see the figure and the table. Its run took "
-                              f"{_took(rec, s.cost)}.{tie}"))
+                              f"{took(rec, s.cost)}.{tie}"))
         return out
 
     def tables(self, run, p):
