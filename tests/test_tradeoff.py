@@ -268,7 +268,7 @@ def test_a_cost_the_results_do_not_record_is_nan_not_zero():
     assert _cost(staged)["particle_steps"] == 1234567.0
 
 
-def test_the_repeat_is_not_a_setting_on_the_pareto_front():
+def test_the_repeat_is_not_a_setting_on_the_pareto_front(monkeypatch):
     """The repeat of the reference is the timing's check: with a cost below the reference's and the same error it
     would dominate the reference on the front. The front is of the settings only; particle-steps/s are per second of
     the cost compared."""
@@ -286,17 +286,11 @@ def test_the_repeat_is_not_a_setting_on_the_pareto_front():
             dict(observables={"a": 1.1}, wall_s=6.0, particle_steps=500.0, dem_s=2.0, bem_s=0.0, sim_s=2.0),
             dict(observables={"a": 1.02}, wall_s=8.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
             dict(observables={"a": 1.0}, wall_s=9.0, particle_steps=1000.0, dem_s=3.9, bem_s=0.0, sim_s=3.9)]
-    import demflow.sweep as sweep
-
-    saved = sweep.run_sweep
-    sweep.run_sweep = lambda f, jobs, **kw: runs
-    try:
-        study.warmup = False
-        study.scheduler, study.workers = "serial", None
-        study.case = "thesis-impact"
-        t = study.compute().table
-    finally:
-        sweep.run_sweep = saved
+    monkeypatch.setattr("demflow.sweep.run_sweep", lambda f, jobs, **kw: runs)  # the five runs' measured results
+    study.warmup = False
+    study.scheduler, study.workers = "serial", None
+    study.case = "thesis-impact"
+    t = study.compute().table
     assert t.run.tolist()[-1] == REPEAT and not t.pareto.iloc[-1]  # cheaper than the reference, same error: not on it
     assert t.pareto.iloc[0]  # the reference (error 0) is on the front of the settings
     assert t.particle_steps_per_s.tolist() == [250.0, 250.0, 250.0, 250.0, 1000.0 / 3.9]  # per simulation second
