@@ -256,7 +256,7 @@ def main(argv=None):
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from .tradeoff import TradeoffStudy, tie_rule
+        from .tradeoff import TradeoffStudy
 
         try:
             study = TradeoffStudy(args.case, _parse_grid(args.knob), reference=_parse_sets(args.reference),
@@ -278,8 +278,8 @@ def main(argv=None):
 
         save_figure(fig, str(out / "tradeoff.png"))
         print(t.to_string(index=False))
-        print(f"recommended: {study.recommended['run']}. {tie_rule(study.timing_noise, study.cost)} Table and figure in "
-              f"{out}")
+        why, tie = study.reason()
+        print(f"recommended: {study.recommended['run']} ({why}).{' ' + tie if tie else ''} Table and figure in {out}")
         return 0
     if args.cmd == "sweep":
         from .sweep import case_sweep

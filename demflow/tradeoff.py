@@ -246,6 +246,17 @@ class TradeoffStudy:
         self.table = t
         return self
 
+    def reason(self) -> tuple[str, str]:
+        """Why the recommended run was picked, as the page and ``demflow tradeoff`` state it: (the rule that picked it,
+        the tie sentence of :func:`tie_rule` when the costs decided, '' when no setting is within the floor and the
+        most accurate one was taken whatever its cost)."""
+        if self.table is None:
+            raise RuntimeError("call compute() first")
+        if self.within_floor:
+            return (f"the most accurate of the equally cheap within {self.accept:g} × the chaos floor "
+                    f"{self.floor_error:.3g}", tie_rule(self.timing_noise, self.cost))
+        return (f"none is within {self.accept:g} × the chaos floor {self.floor_error:.3g}: the most accurate", "")
+
     @property
     def recommended(self) -> dict:
         """The recommended run's row (as a dict)."""

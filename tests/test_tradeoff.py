@@ -59,6 +59,9 @@ def test_the_cli_writes_table_and_figure(tmp_path):
                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr
     assert "recommended:" in out.stdout
+    # no Δt is within 2 × this floor (5e-7): the most accurate is taken whatever it costs, and the message says so
+    # (it stated the tie rule of equally cheap settings, which had not been applied)
+    assert "none is within 2 × the chaos floor" in out.stdout and "equally cheap" not in out.stdout
     assert {p.name for p in tmp_path.iterdir()} >= {"tradeoff.parquet", "tradeoff.txt", "tradeoff.png"}
 
 
@@ -181,6 +184,7 @@ def test_a_resolution_knob_below_the_chaos_floor_fails_its_check_and_says_why():
                           recommended=[False, False, True, False, False, False]))
     s = SimpleNamespace(table=t, floor={"kn": 1.0001e7}, floor_error=0.03, accept=2.0, within_floor=True,
                         timing_noise=0.0, repeat_identical=True, cost="wall_s", recommended=t.iloc[2].to_dict())
+    s.reason = lambda: TradeoffStudy.reason(s)  # the study's own wording of its pick
     case = TinyImpactStudy()
     checks = case.checks(CaseRun(extras={"study": s}), case.merged())
     (dt,) = [c for c in checks if c.name.startswith("dt:")]
@@ -294,6 +298,8 @@ def test_the_repeat_is_not_a_setting_on_the_pareto_front(monkeypatch):
     assert t.run.tolist()[-1] == REPEAT and not t.pareto.iloc[-1]  # cheaper than the reference, same error: not on it
     assert t.pareto.iloc[0]  # the reference (error 0) is on the front of the settings
     assert t.particle_steps_per_s.tolist() == [250.0, 250.0, 250.0, 250.0, 1000.0 / 3.9]  # per simulation second
+    why, tie = study.reason()  # dt = 1.0 (error 0.02) is within 2 × the floor (0.01): the costs decided
+    assert why.startswith("the most accurate of the equally cheap") and "equally cheap" in tie
 
 
 def test_settings_are_compared_by_simulation_time_where_every_run_records_it():

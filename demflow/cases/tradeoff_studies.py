@@ -29,7 +29,7 @@ noise, :func:`demflow.tradeoff.timing_noise`); the chaos floor and the recommend
 """
 from __future__ import annotations
 
-from ..tradeoff import REPEAT, tie_rule, took
+from ..tradeoff import REPEAT, took
 from .base import Case, CaseRun, Check
 
 
@@ -169,13 +169,10 @@ class TradeoffCase(Case):
             f"study and nothing else. Its run took {took(rep, s.cost)}, the reference's "
             f"{took(t[t.run == 'reference'].iloc[0], s.cost)}.", kind="self-consistency"))
         rec = s.recommended
-        why = (f"the most accurate of the equally cheap within {s.accept:g} × the chaos floor {s.floor_error:.3g}"
-               if s.within_floor else
-               f"none is within {s.accept:g} × the chaos floor {s.floor_error:.3g}: the most accurate")
-        tie = " " + tie_rule(s.timing_noise, s.cost) if s.within_floor else ""
+        why, tie = s.reason()
         out.append(Check.info(f"recommended: {rec['run']} (error {rec['error']:.3g}; {why})", rec["error"], self.source,
                               f"The recommendation, not a pass/fail: see the figure and the table. Its run took "
-                              f"{took(rec, s.cost)}.{tie}"))
+                              f"{took(rec, s.cost)}.{' ' + tie if tie else ''}"))
         return out
 
     def tables(self, run, p):
