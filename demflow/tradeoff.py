@@ -117,8 +117,8 @@ def tie_rule(noise: float, cost: str = "wall_s") -> str:
 
 
 def took(row, cost: str = "wall_s") -> str:
-    """A run's time as the page and ``demflow tradeoff`` state it: its wall time, and the simulation time where that
-    is the cost compared."""
+    """A run's time as a study page's text states it: its wall time, and the simulation time where that is the cost
+    compared."""
     if cost == "sim_s":
         return f"{row['wall_s']:.3g} s ({row['sim_s']:.3g} s simulating)"
     return f"{row['wall_s']:.3g} s"
