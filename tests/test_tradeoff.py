@@ -278,27 +278,18 @@ def test_the_repeat_is_not_a_setting_on_the_pareto_front(monkeypatch):
     the cost compared."""
     from demflow.tradeoff import REPEAT, TradeoffStudy
 
-    study = TradeoffStudy.__new__(TradeoffStudy)
-    study.floor = {"kn": 1.0}
-    study.accept = 2.0
-    study.scale = 1e-12
-    study.observables = None
-    study.knobs = {"dt": [2.0, 1.0]}
-    study.reference = {}
+    study = TradeoffStudy("thesis-impact", {"dt": [2e-5, 1e-5]}, floor={"kn": 1.0001e7}, warmup=False)
     runs = [dict(observables={"a": 1.0}, wall_s=10.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
             dict(observables={"a": 1.01}, wall_s=10.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
             dict(observables={"a": 1.1}, wall_s=6.0, particle_steps=500.0, dem_s=2.0, bem_s=0.0, sim_s=2.0),
             dict(observables={"a": 1.02}, wall_s=8.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
             dict(observables={"a": 1.0}, wall_s=9.0, particle_steps=1000.0, dem_s=3.9, bem_s=0.0, sim_s=3.9)]
-    monkeypatch.setattr("demflow.sweep.run_sweep", lambda f, jobs, **kw: runs)  # the five runs' measured results
-    study.warmup = False
-    study.scheduler, study.workers = "serial", None
-    study.case = "thesis-impact"
+    monkeypatch.setattr("demflow.sweep.run_sweep", lambda f, jobs, **kw: runs)  # the five runs' results, given
     t = study.compute().table
     assert t.run.tolist()[-1] == REPEAT and not t.pareto.iloc[-1]  # cheaper than the reference, same error: not on it
     assert t.pareto.iloc[0]  # the reference (error 0) is on the front of the settings
     assert t.particle_steps_per_s.tolist() == [250.0, 250.0, 250.0, 250.0, 1000.0 / 3.9]  # per simulation second
-    why, tie = study.reason()  # dt = 1.0 (error 0.02) is within 2 × the floor (0.01): the costs decided
+    why, tie = study.reason()  # dt = 1e-5 (error 0.02) is within 2 × the floor (0.01): the costs decided
     assert why.startswith("the most accurate of the equally cheap") and "equally cheap" in tie
 
 
