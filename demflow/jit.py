@@ -56,15 +56,26 @@ _NUMBA_LOCATORS = [name for name in ("UserProvidedCacheLocator", "InTreeCacheLoc
 
 
 class PackageStampedLocator:
-    """Numba's own locator for a demflow kernel (same cache directory and file names), with the source stamp
-    (own file, whole package) instead of the own file only.  Installed through Numba's public setting
-    ``numba.config.CACHE_LOCATOR_CLASSES`` (``NUMBA_CACHE_LOCATOR_CLASSES``), ahead of the locators it names."""
+    """Numba's own locator for a demflow kernel (same cache directory), with the source stamp (own file, whole
+    package) instead of the own file only, and a digest of that stamp in the cache files' names.  Installed through
+    Numba's public setting ``numba.config.CACHE_LOCATOR_CLASSES`` (``NUMBA_CACHE_LOCATOR_CLASSES``), ahead of the
+    locators it names.
 
-    def __init__(self, base):
+    Why the stamp is in the names: Numba unpickles a kernel's whole index, the stamp and the signatures it holds,
+    before it compares the stamp, and a signature naming a type that the source no longer defines fails there
+    (``AttributeError: Can't get attribute ...``) instead of being discarded as stale: found 2026-11-28, when a
+    structure added to demflow.contacts.spheres and removed again left the index of ``run_steps3`` unreadable,
+    and every run of a 3D scene stopped with that error until the cache was deleted by hand; an upgrade over an
+    installed demflow leaves its cache files behind the same way.  An index is now read only by the source it
+    was written for; the files of this kernel written for other sources are removed when it saves anew."""
+
+    def __init__(self, base, name):
         self._base = base
+        self._name = name  # Numba's file-name prefix of the kernel, module.qualname
 
     def ensure_cache_path(self):
         self._base.ensure_cache_path()
+        self._remove_stale()
 
     def get_cache_path(self):
         return self._base.get_cache_path()
@@ -73,17 +84,37 @@ class PackageStampedLocator:
         return (self._base.get_source_stamp(), package_digest())
 
     def get_disambiguator(self):
-        return self._base.get_disambiguator()
+        stamp = hashlib.sha256(repr(self.get_source_stamp()).encode()).hexdigest()[:12]
+        return f"{self._base.get_disambiguator()}-{stamp}"
+
+    def _remove_stale(self):
+        """Remove this kernel's index and data files written for another source (another stamp in the name)."""
+        before = f"{self._name}-{self._base.get_disambiguator()}"  # then "-<stamp>." now, "." before 2026-11-28
+        current = f"{self._name}-{self.get_disambiguator()}."
+        try:
+            entries = list(os.scandir(self.get_cache_path()))
+        except OSError:
+            return
+        for e in entries:
+            if e.name.startswith((before + "-", before + ".")) and not e.name.startswith(current) \
+                    and e.name.endswith((".nbi", ".nbc")):
+                try:
+                    os.unlink(e.path)
+                except OSError:  # another process removed it, or the directory is read-only
+                    pass
 
     @classmethod
     def from_function(cls, py_func, py_file):
         path = Path(py_file).resolve()
         if not any(path.is_relative_to(t) for t in _STAMPED_TREES):
             return None
-        for name in _base_locators():
-            base = _locator_class(name).from_function(py_func, py_file)
+        # Numba's own prefix of the kernel's files (numba.core.caching's _CacheImpl.get_filename_base)
+        name = f"{os.path.splitext(os.path.basename(py_file))[0]}.{py_func.__qualname__}"
+        name = name.replace("<", "").replace(">", "")
+        for locator in _base_locators():
+            base = _locator_class(locator).from_function(py_func, py_file)
             if base is not None:
-                return cls(base)
+                return cls(base, name)
         return None
 
 

@@ -66,3 +66,49 @@ def test_the_stamp_survives_numba_rereading_its_settings(monkeypatch):
     kernel = jit.njit(add_one)
     assert kernel(1) == 2
     assert isinstance(kernel._cache._impl.locator, jit.PackageStampedLocator)
+
+
+def _unreadable_index() -> bytes:
+    """An index as Numba writes it (its version, then the pickled stamp and signatures) whose signatures name a type
+    the source no longer defines: unpickling it raises AttributeError."""
+    import pickle
+
+    import numba
+
+    return pickle.dumps(numba.__version__, protocol=-1) + b"cdemflow.jit\nNoSuchStructure\n."
+
+
+def test_an_index_written_for_another_source_is_never_read():
+    """Numba unpickles an index before it compares its stamp: an index whose signatures name a type that is gone
+    stopped every call of the kernel with AttributeError (found 2026-11-28 with run_steps3).  The stamp is in the
+    cache files' names now: the kernel compiles anew, and its files written for other sources are removed."""
+    import sys
+
+    def add_two(x):
+        return x + 2
+
+    kernel = jit.njit(add_two)
+    loc = kernel._cache._impl.locator
+    assert isinstance(loc, jit.PackageStampedLocator)
+    cache = Path(loc.get_cache_path())
+    cache.mkdir(parents=True, exist_ok=True)
+    base = f"{loc._name}-{loc._base.get_disambiguator()}"
+    py = f".py{sys.version_info[0]}{sys.version_info[1]}{getattr(sys, 'abiflags', '')}"
+    current = f"{loc._name}-{loc.get_disambiguator()}{py}"
+    assert current.startswith(base + "-") and current != base + py
+    for f in cache.glob(current + "*"):  # compile and save anew in this test
+        f.unlink()
+    stale = [cache / f"{base}{py}.nbi", cache / f"{base}{py}.1.nbc",  # the names Numba gave before
+             cache / f"{base}-000000000000{py}.nbi"]  # another stamp
+    for f in stale:
+        f.write_bytes(_unreadable_index())
+    other = cache / f"{base}0{py}.nbi"  # another kernel's (line number 10x): kept
+    other.write_bytes(b"")
+    try:
+        assert kernel(1) == 3
+        assert (cache / f"{current}.nbi").is_file()
+        assert [f for f in stale if f.exists()] == []
+        assert other.exists()
+    finally:
+        for f in stale + [other]:
+            f.unlink(missing_ok=True)
