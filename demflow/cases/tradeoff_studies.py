@@ -25,12 +25,29 @@ the study is wrong: it shows as a failed check; a check whose errors all lie wit
 chaos floor says so, passed or failed); the reference runs once more as the study's last run and must give
 the same observables to the bit (self-consistency: determinism; the two runs' costs give the study's timing
 noise, :func:`demflow.tradeoff.timing_noise`); the chaos floor and the recommended setting are reported
-(informative).
+(informative), the floor with how far its cost is from the reference's (:func:`demflow.tradeoff.cost_floor`: with
+the timing noise, what makes two settings equally cheap).
 """
 from __future__ import annotations
 
+import math
+
 from ..tradeoff import REPEAT, took
 from .base import Case, CaseRun, Check
+
+
+def _floor_cost(fl, ref, s) -> str:
+    """The chaos floor's cost against the reference's, as the floor's line states it: the relative difference of the
+    cost compared and, where both record them, the particle-steps each did (the work itself may follow the chaos)."""
+    if getattr(s, "cost_floor", None) is None:
+        return ""
+    text = f"; its {'simulation' if s.cost == 'sim_s' else 'wall'} time is {s.cost_floor:.0%} from the reference's"
+    a, b = float(fl.get("particle_steps", math.nan)), float(ref.get("particle_steps", math.nan))
+    if math.isfinite(a) and math.isfinite(b) and b > 0:
+        text += (f" (the same work: {a:.4g} particle-steps" if a == b else
+                 f" (it did {a:.4g} particle-steps against the reference's {b:.4g}, {abs(a - b) / b:.0%} apart")
+        text += ")"
+    return text
 
 
 def typed(text, default):
@@ -160,7 +177,8 @@ class TradeoffCase(Case):
             out.append(Check.info(f"chaos floor: {', '.join(f'{k} = {v}' for k, v in s.floor.items())} on top of the "
                                   f"reference (error {s.floor_error:.3g})", s.floor_error,
                                   self.source, "How far a physically irrelevant change moves the observables: a knob's "
-                                  f"error is only meaningful above it. Its run took {took(fl, s.cost)}."))
+                                  f"error is only meaningful above it. Its run took {took(fl, s.cost)}"
+                                  f"{_floor_cost(fl, t[t.run == 'reference'].iloc[0], s)}."))
         rep = t[t.run == REPEAT].iloc[0]
         out.append(Check.condition(
             "reference (repeat): the reference run once more as the study's last run gives the same observables to "
