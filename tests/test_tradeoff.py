@@ -282,6 +282,11 @@ def test_a_chaos_floor_that_moves_the_cost_widens_the_tie_so_the_pick_does_not_f
     assert cost_noise(t[t.run != "chaos floor"], "sim_s") == pytest.approx(1.42 / 51.21)
 
 
+def _given_run(a, wall_s, particle_steps, dem_s):
+    """One run's result as run_observed returns it (observable "a", a dry run: its DEM time is its simulation time)."""
+    return dict(observables={"a": a}, wall_s=wall_s, particle_steps=particle_steps, dem_s=dem_s, bem_s=0.0, sim_s=dem_s)
+
+
 def test_the_study_ties_by_the_floors_cost_difference_and_its_page_states_it(monkeypatch):
     """Through compute(): a floor run 30 % cheaper than the reference makes two knob runs 20 % apart equally cheap, and the
     more accurate (dearer) one is recommended; the tie sentence and the floor's line give the numbers."""
@@ -289,11 +294,8 @@ def test_the_study_ties_by_the_floors_cost_difference_and_its_page_states_it(mon
     from demflow.tradeoff import TradeoffStudy
 
     study = TradeoffStudy("thesis-impact", {"dt": [2e-5, 1e-5]}, floor={"kn": 1.0001e7}, warmup=False)
-    runs = [dict(observables={"a": 1.0}, wall_s=10.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
-            dict(observables={"a": 1.05}, wall_s=9.0, particle_steps=700.0, dem_s=2.8, bem_s=0.0, sim_s=2.8),
-            dict(observables={"a": 1.06}, wall_s=6.0, particle_steps=500.0, dem_s=2.0, bem_s=0.0, sim_s=2.0),
-            dict(observables={"a": 1.02}, wall_s=8.0, particle_steps=600.0, dem_s=2.4, bem_s=0.0, sim_s=2.4),
-            dict(observables={"a": 1.0}, wall_s=9.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0)]
+    runs = [_given_run(1.0, 10.0, 1000.0, 4.0), _given_run(1.05, 9.0, 700.0, 2.8), _given_run(1.06, 6.0, 500.0, 2.0),
+            _given_run(1.02, 8.0, 600.0, 2.4), _given_run(1.0, 9.0, 1000.0, 4.0)]
     monkeypatch.setattr("demflow.sweep.run_sweep", lambda f, jobs, **kw: runs)
     t = study.compute().table
     assert study.timing_noise == 0.0 and study.cost_floor == pytest.approx(0.3) and study.cost_noise == pytest.approx(0.3)
@@ -336,11 +338,8 @@ def test_the_repeat_is_not_a_setting_on_the_pareto_front(monkeypatch):
     from demflow.tradeoff import REPEAT, TradeoffStudy
 
     study = TradeoffStudy("thesis-impact", {"dt": [2e-5, 1e-5]}, floor={"kn": 1.0001e7}, warmup=False)
-    runs = [dict(observables={"a": 1.0}, wall_s=10.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
-            dict(observables={"a": 1.01}, wall_s=10.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
-            dict(observables={"a": 1.1}, wall_s=6.0, particle_steps=500.0, dem_s=2.0, bem_s=0.0, sim_s=2.0),
-            dict(observables={"a": 1.02}, wall_s=8.0, particle_steps=1000.0, dem_s=4.0, bem_s=0.0, sim_s=4.0),
-            dict(observables={"a": 1.0}, wall_s=9.0, particle_steps=1000.0, dem_s=3.9, bem_s=0.0, sim_s=3.9)]
+    runs = [_given_run(1.0, 10.0, 1000.0, 4.0), _given_run(1.01, 10.0, 1000.0, 4.0), _given_run(1.1, 6.0, 500.0, 2.0),
+            _given_run(1.02, 8.0, 1000.0, 4.0), _given_run(1.0, 9.0, 1000.0, 3.9)]
     monkeypatch.setattr("demflow.sweep.run_sweep", lambda f, jobs, **kw: runs)  # the five runs' results, given
     t = study.compute().table
     assert t.run.tolist()[-1] == REPEAT and not t.pareto.iloc[-1]  # cheaper than the reference, same error: not on it
