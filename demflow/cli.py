@@ -125,7 +125,13 @@ def build_parser() -> argparse.ArgumentParser:
                                     "irrelevant change) and once per value of each knob; write the knob table "
                                     "(error of the case's observables vs the reference, wall and simulation time, "
                                     "particle-steps/s of the time compared, "
-                                    "Pareto front, recommended setting) and the error-vs-cost figure.\n\nexample:\n"
+                                    "Pareto front, recommended setting) and the error-vs-cost figure. Among the "
+                                    "settings whose error is within --accept × the floor's, those whose cost is within "
+                                    "the larger of two relative differences of the cheapest one's count as equally "
+                                    "cheap, and the most accurate of them is recommended (none within: the most "
+                                    "accurate); the differences are the reference run's against its repeat (the "
+                                    "host's noise) and against the floor run (what an irrelevant change does to the "
+                                    "cost).\n\nexample:\n"
                                     "  demflow tradeoff thesis-impact --knob dt=4e-5,2e-5,1e-5 --reference dt=1e-6 "
                                     "--floor kn=1.0001e7")
     to.add_argument("case", help="the case name ('demflow cases' lists them)")

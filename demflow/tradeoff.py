@@ -35,8 +35,8 @@ work itself follows the chaotic trajectory (the floor run of 2026-11-28 did 25 %
 reference).  Settings whose cost is within the larger of the two of the cheapest one's are equally cheap
 (:func:`recommend`), so that the pick does not follow the host's noise or the chaos of one draw from run to run (it
 did: the photoelastic study's three Δt settings, 6.2-6.7 s of wall time in one run, picked 0.1, 0.07 or 0.05 over ten
-runs; the 3D study's K = 2, K = 4 and 8 cm/s, all within the chaos floor and 18-22 s of compute time, took turns while
-the repeat measured 3 %, README).  With ``warmup`` one untimed run compiles
+runs; the 3D study's K = 2, K = 4 and 8 cm/s, all within the chaos floor and 13-25 s of compute time each over the
+runs of 2026-11-28, took turns while the repeat measured 0.2-5 %, README).  With ``warmup`` one untimed run compiles
 the kernels first, so that no timed run pays for compilation (``True``: the last knob run; a dict:
 overrides of the reference for a cheaper run that compiles the same kernels).
 """
