@@ -211,8 +211,10 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
         vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
         rotate_history(hist, k, nx, ny, nz)
         ma = sp.mat[i]
-        Fn, Tx, Ty, Tz, sliding, dissipated = law_force3(law, hist, k, ma, mb, meff, re, overlap, vn, vtx, vty,
-                                                         vtz, nx, ny, nz, dt)
+        Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row = law_force3(law, hist, k, ma, mb, meff, re, overlap, vn, vtx,
+                                                                     vty, vtz, nx, ny, nz, dt)
+        for c in range(n_row):
+            hist[k, c] = row[c]
         diss += dissipated
         fx = -Fn * nx + Tx
         fy = -Fn * ny + Ty

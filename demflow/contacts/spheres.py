@@ -674,8 +674,10 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 status = BLOWUP_OVERLAP
             vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
             ma = int(P[i, 11])
-            Fn, Tx, Ty, Tz, sliding, dissipated = law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn,
-                                                             vtx, vty, vtz, nx, ny, nz, dt)
+            Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row = law_force3(law, hist, k, ma, mb, meff, rstar, overlap,
+                                                                         vn, vtx, vty, vtz, nx, ny, nz, dt)
+            for c in range(n_row):
+                hist[k, c] = row[c]
             diss += dissipated
             fx = -Fn * nx + Tx
             fy = -Fn * ny + Ty

@@ -120,14 +120,18 @@ class LawFamily:
 # projects them itself).
 
 def law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
-    """Advance 3D contact k by one step; returns (Fn, Tx, Ty, Tz, sliding, dissipated).
+    """Advance 3D contact k by one step; returns (Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row): the
+    caller writes ``row[c]`` to ``hist[k, c]`` for c < n_row (the law only reads ``hist``).
 
     ``vn`` = (v_i - v_j)·n > 0 while approaching, (vtx, vty, vtz) the tangential relative velocity
     of i's contact point against j's, n the unit normal from i to j, ``meff`` m_i m_j/(m_i + m_j)
     (the body mass against a plane), ``rstar`` R_i R_j/(R_i + R_j) (R_i against a plane).  Fn >= 0
     is the total normal force (it pushes i along -n); T is the total tangential force on i; ``dissipated``
     the energy the contact's dashpots and Coulomb slip took in the step [force·length] (>= 0; the energy
-    balance of :class:`demflow.simulation3d.Simulation3D`).  Compiled per law (overload)."""
+    balance of :class:`demflow.simulation3d.Simulation3D`).  ``row`` (a tuple of floats) is contact k's history
+    after the step.  Why the caller writes it: Numba (0.68) keeps an atomic reference-count increment and
+    decrement per call of an array that an inlined law holds across its branches; a law that reads its row
+    at once and returns the new one leaves none (hertz_mindlin.hertz_contact3).  Compiled per law (overload)."""
     raise NotImplementedError(f"no compiled 3D law for parameters of type {type(law).__name__}")
 
 

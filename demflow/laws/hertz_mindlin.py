@@ -197,16 +197,22 @@ HISTORY_WIDTH_3D = 8  # T (or u) vector, MD direction e (3), T_rev, MD state (di
 
 
 @njit_inline
-def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, hist, k, meff, rstar, overlap, vn, vtx, vty, vtz,
-                   nx, ny, nz, dt):
-    """The Hertz-Mindlin force of 3D contact k from the pair's scalar parameters (law_force3's contract).
+def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, h0, h1, h2, e0, e1, e2, T_rev, state, meff, rstar,
+                   overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
+    """The Hertz-Mindlin force of one 3D contact from the pair's scalar parameters and the contact's history
+    (law_force3's contract); returns (Fn, Tx, Ty, Tz, sliding, dissipated) and the history after the step.
 
     E*, G* the effective moduli, mu the Coulomb coefficient, zn/zt the damping ratios, mode TANGENTIAL_*,
-    shear_spring SHEAR_*, cap CAP_*.  It takes scalars, and law_force3's implementation only reads the
-    tables: the same body reading the HertzParams tables itself made the whole pair pass 1.8x slower
-    (2.47 against 1.37 ms a step on benchmarks/packing3d.py's 10 000-sphere packing, one thread, the same
-    bits; measured 2026-11-25).  Numba (0.68) then keeps reference-count updates of the tables in the
-    inlined body, which its pruning does not remove when the body has several returns."""
+    shear_spring SHEAR_*, cap CAP_*.  History (columns of the pair's row, :data:`HISTORY_WIDTH_3D`): the
+    tangential vector (h0, h1, h2); for Mindlin-Deresiewicz the direction e (e0, e1, e2), T_rev and the
+    state (zeros and unused otherwise).
+
+    Scalars in and out, and one return: law_force3's implementation reads the tables and the history row
+    and writes the row back.  Numba (0.68) keeps the reference-count updates of an array passed into an
+    inlined body whose uses end in several branches: the tables read here made the whole pair pass 1.8x
+    slower (2.47 against 1.37 ms a step on benchmarks/packing3d.py's 10 000-sphere packing, one thread,
+    measured 2026-11-25), and the history array passed here cost an atomic increment and decrement per
+    touching pair, 11-14 % of the pass's samples (perf, 2026-11-28, an Intel Xeon host; the same bits)."""
     a = math.sqrt(rstar * overlap)
     kn = 2.0 * E * a
     Fe = 4.0 / 3.0 * E * a * overlap
@@ -214,83 +220,90 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, hist, k, meff, rst
     if Fn < 0.0:
         Fn = 0.0
     diss = (Fn - Fe) * vn * dt  # the normal dashpot (what the no-tension cut leaves of it)
-    if mode == TANGENTIAL_NONE:
-        return Fn, 0.0, 0.0, 0.0, False, diss
-    kt = 8.0 * G * a
-    if mode == TANGENTIAL_MINDLIN:
-        if shear_spring == SHEAR_TOTAL:
-            hist[k, 0] += vtx * dt
-            hist[k, 1] += vty * dt
-            hist[k, 2] += vtz * dt
-            Tx = -kt * hist[k, 0]
-            Ty = -kt * hist[k, 1]
-            Tz = -kt * hist[k, 2]
+    Tx = 0.0
+    Ty = 0.0
+    Tz = 0.0
+    sliding = False
+    if mode != TANGENTIAL_NONE:
+        kt = 8.0 * G * a
+        at_rest = False  # Mindlin-Deresiewicz before any tangential motion: the history's force as it is
+        if mode == TANGENTIAL_MINDLIN:
+            if shear_spring == SHEAR_TOTAL:
+                h0 += vtx * dt
+                h1 += vty * dt
+                h2 += vtz * dt
+                Tx = -kt * h0
+                Ty = -kt * h1
+                Tz = -kt * h2
+            else:
+                Tx = h0 - kt * vtx * dt
+                Ty = h1 - kt * vty * dt
+                Tz = h2 - kt * vtz * dt
         else:
-            Tx = hist[k, 0] - kt * vtx * dt
-            Ty = hist[k, 1] - kt * vty * dt
-            Tz = hist[k, 2] - kt * vtz * dt
-    else:
-        # Mindlin-Deresiewicz along the contact's first direction of motion e (hist 3-5)
-        ex = hist[k, 3] - (hist[k, 3] * nx + hist[k, 4] * ny + hist[k, 5] * nz) * nx
-        ey = hist[k, 4] - (hist[k, 3] * nx + hist[k, 4] * ny + hist[k, 5] * nz) * ny
-        ez = hist[k, 5] - (hist[k, 3] * nx + hist[k, 4] * ny + hist[k, 5] * nz) * nz
-        en = math.sqrt(ex * ex + ey * ey + ez * ez)
-        vt = math.sqrt(vtx * vtx + vty * vty + vtz * vtz)
-        if en == 0.0:
-            if vt == 0.0:
-                return Fn, hist[k, 0], hist[k, 1], hist[k, 2], False, diss
-            ex, ey, ez, en = vtx, vty, vtz, vt
-        ex /= en
-        ey /= en
-        ez /= en
-        hist[k, 3] = ex
-        hist[k, 4] = ey
-        hist[k, 5] = ez
-        Tpar = hist[k, 0] * ex + hist[k, 1] * ey + hist[k, 2] * ez
-        state = hist[k, 7]
-        direction = 0.0 if state == 0.0 else math.copysign(1.0, state)
-        on_branch = abs(state) > 1.5
-        muN = mu * (Fn if cap == CAP_TOTAL else Fe)
-        du = (vtx * ex + vty * ey + vtz * ez) * dt
-        Tnew, T_rev, direction, on_branch = md_step(Tpar, hist[k, 6], direction, on_branch, kt, du, muN)
-        hist[k, 6] = T_rev
-        hist[k, 7] = direction * (2.0 if on_branch else 1.0)
-        # across e: the no-slip stiffness
-        Tx = hist[k, 0] - Tpar * ex - kt * (vtx * dt - du * ex) + Tnew * ex
-        Ty = hist[k, 1] - Tpar * ey - kt * (vty * dt - du * ey) + Tnew * ey
-        Tz = hist[k, 2] - Tpar * ez - kt * (vtz * dt - du * ez) + Tnew * ez
-    Tcap = mu * (Fn if cap == CAP_TOTAL else Fe)
-    Tm2 = Tx * Tx + Ty * Ty + Tz * Tz
-    sliding = Tm2 > Tcap * Tcap
-    if sliding:
-        Tm = math.sqrt(Tm2)
-        s = Tcap / Tm
-        # Coulomb slip: the spring force beyond the cap, (|T_trial| - T_cap)/k_t of slip at T_cap
-        diss += Tcap * (Tm - Tcap) / kt
-        Tx *= s
-        Ty *= s
-        Tz *= s
-        if shear_spring == SHEAR_TOTAL and mode == TANGENTIAL_MINDLIN:
-            hist[k, 0] *= s
-            hist[k, 1] *= s
-            hist[k, 2] *= s
-        else:
-            hist[k, 0] = Tx
-            hist[k, 1] = Ty
-            hist[k, 2] = Tz
-        return Fn, Tx, Ty, Tz, True, diss
-    if not (shear_spring == SHEAR_TOTAL and mode == TANGENTIAL_MINDLIN):
-        hist[k, 0] = Tx
-        hist[k, 1] = Ty
-        hist[k, 2] = Tz
-    zt = zt
-    if zt > 0.0:
-        ct = 2.0 * zt * math.sqrt(meff * kt)
-        Tx -= ct * vtx
-        Ty -= ct * vty
-        Tz -= ct * vtz
-        diss += ct * (vtx * vtx + vty * vty + vtz * vtz) * dt
-    return Fn, Tx, Ty, Tz, False, diss
+            # Mindlin-Deresiewicz along the contact's first direction of motion e
+            ex = e0 - (e0 * nx + e1 * ny + e2 * nz) * nx
+            ey = e1 - (e0 * nx + e1 * ny + e2 * nz) * ny
+            ez = e2 - (e0 * nx + e1 * ny + e2 * nz) * nz
+            en = math.sqrt(ex * ex + ey * ey + ez * ez)
+            vt = math.sqrt(vtx * vtx + vty * vty + vtz * vtz)
+            if en == 0.0:
+                if vt == 0.0:
+                    at_rest = True
+                    Tx = h0
+                    Ty = h1
+                    Tz = h2
+                else:
+                    ex, ey, ez, en = vtx, vty, vtz, vt
+            if not at_rest:
+                ex /= en
+                ey /= en
+                ez /= en
+                e0 = ex
+                e1 = ey
+                e2 = ez
+                Tpar = h0 * ex + h1 * ey + h2 * ez
+                direction = 0.0 if state == 0.0 else math.copysign(1.0, state)
+                on_branch = abs(state) > 1.5
+                muN = mu * (Fn if cap == CAP_TOTAL else Fe)
+                du = (vtx * ex + vty * ey + vtz * ez) * dt
+                Tnew, T_rev, direction, on_branch = md_step(Tpar, T_rev, direction, on_branch, kt, du, muN)
+                state = direction * (2.0 if on_branch else 1.0)
+                # across e: the no-slip stiffness
+                Tx = h0 - Tpar * ex - kt * (vtx * dt - du * ex) + Tnew * ex
+                Ty = h1 - Tpar * ey - kt * (vty * dt - du * ey) + Tnew * ey
+                Tz = h2 - Tpar * ez - kt * (vtz * dt - du * ez) + Tnew * ez
+        if not at_rest:
+            Tcap = mu * (Fn if cap == CAP_TOTAL else Fe)
+            Tm2 = Tx * Tx + Ty * Ty + Tz * Tz
+            sliding = Tm2 > Tcap * Tcap
+            if sliding:
+                Tm = math.sqrt(Tm2)
+                s = Tcap / Tm
+                # Coulomb slip: the spring force beyond the cap, (|T_trial| - T_cap)/k_t of slip at T_cap
+                diss += Tcap * (Tm - Tcap) / kt
+                Tx *= s
+                Ty *= s
+                Tz *= s
+                if shear_spring == SHEAR_TOTAL and mode == TANGENTIAL_MINDLIN:
+                    h0 *= s
+                    h1 *= s
+                    h2 *= s
+                else:
+                    h0 = Tx
+                    h1 = Ty
+                    h2 = Tz
+            else:
+                if not (shear_spring == SHEAR_TOTAL and mode == TANGENTIAL_MINDLIN):
+                    h0 = Tx
+                    h1 = Ty
+                    h2 = Tz
+                if zt > 0.0:
+                    ct = 2.0 * zt * math.sqrt(meff * kt)
+                    Tx -= ct * vtx
+                    Ty -= ct * vty
+                    Tz -= ct * vtz
+                    diss += ct * (vtx * vtx + vty * vty + vtz * vtz) * dt
+    return Fn, Tx, Ty, Tz, sliding, diss, h0, h1, h2, e0, e1, e2, T_rev, state
 
 
 @overload(law_force3, inline="always")
@@ -299,9 +312,17 @@ def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz,
         return None
 
     def impl(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
-        return hertz_contact3(law.Estar[ma, mb], law.Gstar[ma, mb], law.mu[ma, mb], law.zn[ma, mb], law.zt[ma, mb],
-                              law.tangential[ma, mb], law.shear_spring, law.cap, hist, k, meff, rstar, overlap, vn,
-                              vtx, vty, vtz, nx, ny, nz, dt)
+        # the history row is read here, in one block (columns past the row's width read as its last column,
+        # values no mode but Mindlin-Deresiewicz uses), and written back by the caller (law_force3's contract)
+        mode = law.tangential[ma, mb]
+        last = hist.shape[1] - 1
+        Fn, Tx, Ty, Tz, sliding, diss, h0, h1, h2, e0, e1, e2, T_rev, state = hertz_contact3(
+            law.Estar[ma, mb], law.Gstar[ma, mb], law.mu[ma, mb], law.zn[ma, mb], law.zt[ma, mb], mode,
+            law.shear_spring, law.cap, hist[k, 0], hist[k, 1], hist[k, 2], hist[k, min(3, last)],
+            hist[k, min(4, last)], hist[k, min(5, last)], hist[k, min(6, last)], hist[k, min(7, last)], meff, rstar,
+            overlap, vn, vtx, vty, vtz, nx, ny, nz, dt)
+        n_row = HISTORY_WIDTH_3D if mode == TANGENTIAL_MD else 3
+        return Fn, Tx, Ty, Tz, sliding, diss, (h0, h1, h2, e0, e1, e2, T_rev, state), n_row
     return impl
 
 
@@ -312,22 +333,23 @@ def _hertz_energy3(law, e, hist, k, ma, mb, rstar, overlap):
 
     def impl(law, e, hist, k, ma, mb, rstar, overlap):
         return hertz_energy_contact3(law.Estar[ma, mb], law.Gstar[ma, mb], law.tangential[ma, mb], law.shear_spring,
-                                     e, hist, k, rstar, overlap)
+                                     e, hist[k, 0], hist[k, 1], hist[k, 2], rstar, overlap)
     return impl
 
 
 @njit_inline
-def hertz_energy_contact3(E, G, mode, shear_spring, e, hist, k, rstar, overlap):
-    """e plus the elastic energy of 3D contact k, from the pair's scalar parameters (see hertz_contact3)."""
+def hertz_energy_contact3(E, G, mode, shear_spring, e, h0, h1, h2, rstar, overlap):
+    """e plus the elastic energy of one 3D contact with tangential history (h0, h1, h2), from the pair's scalar
+    parameters (scalars for the reason given in :func:`hertz_contact3`)."""
     if overlap <= 0.0:
         return e
     e += 8.0 / 15.0 * E * math.sqrt(rstar) * overlap ** 2.5  # ∫F dδ
     if mode != TANGENTIAL_NONE:
         kt = 8.0 * G * math.sqrt(rstar * overlap)
         if shear_spring == SHEAR_TOTAL and mode == TANGENTIAL_MINDLIN:
-            e += 0.5 * kt * (hist[k, 0] ** 2 + hist[k, 1] ** 2 + hist[k, 2] ** 2)
+            e += 0.5 * kt * (h0 ** 2 + h1 ** 2 + h2 ** 2)
         else:
-            e += 0.5 * (hist[k, 0] ** 2 + hist[k, 1] ** 2 + hist[k, 2] ** 2) / kt
+            e += 0.5 * (h0 ** 2 + h1 ** 2 + h2 ** 2) / kt
     return e
 
 

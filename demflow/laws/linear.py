@@ -181,51 +181,56 @@ def _linear_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz
 
     def impl(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
         row = law.row
-        return linear_contact3(row[ma, mb, 0], row[ma, mb, 1], row[ma, mb, 2], row[ma, mb, 3], row[ma, mb, 4],
-                               row[ma, mb, 5], law.normal_mode, law.sliding_mode, law.has_shear, hist, k, overlap,
-                               vn, vtx, vty, vtz, dt)
+        Fn, Tx, Ty, Tz, sliding, diss, Sx, Sy, Sz, N = linear_contact3(
+            row[ma, mb, 0], row[ma, mb, 1], row[ma, mb, 2], row[ma, mb, 3], row[ma, mb, 4], row[ma, mb, 5],
+            law.normal_mode, law.sliding_mode, law.has_shear, hist[k, 0], hist[k, 1], hist[k, 2], hist[k, 3],
+            overlap, vn, vtx, vty, vtz, dt)
+        return Fn, Tx, Ty, Tz, sliding, diss, (Sx, Sy, Sz, N), 4
     return impl
 
 
 @njit_inline
-def linear_contact3(kn, ks, cn, cs, mu, coh, normal_mode, sliding_mode, has_shear, hist, k, overlap, vn, vtx, vty,
-                    vtz, dt):
-    """The linear law's force on 3D contact k from the pair's scalar parameters (law_force3's contract;
-    scalars for the reason given in :func:`demflow.laws.hertz_mindlin.hertz_contact3`)."""
+def linear_contact3(kn, ks, cn, cs, mu, coh, normal_mode, sliding_mode, has_shear, Sx, Sy, Sz, N, overlap, vn, vtx,
+                    vty, vtz, dt):
+    """The linear law's force on one 3D contact with history (shear spring S, normal spring N), from the pair's
+    scalar parameters; returns law_force3's six values and the history after the step (scalars in and out
+    for the reason given in :func:`demflow.laws.hertz_mindlin.hertz_contact3`)."""
     if normal_mode == NORMAL_INCREMENTAL:
-        N = hist[k, 3] + kn * vn * dt
+        N = N + kn * vn * dt
     else:
         N = kn * overlap
     if N < 0.0:
         N = 0.0
-    hist[k, 3] = N
     Fn = N + cn * vn
     if Fn < 0.0:
         Fn = 0.0
     diss = (Fn - N) * vn * dt  # the normal dashpot (what the no-tension cut leaves of it)
-    if not has_shear:
-        return Fn, 0.0, 0.0, 0.0, False, diss
-    Sx = hist[k, 0] - ks * vtx * dt
-    Sy = hist[k, 1] - ks * vty * dt
-    Sz = hist[k, 2] - ks * vtz * dt
-    smax = mu * (Fn if sliding_mode == SLIDING_CS else N) + coh
-    s2 = Sx * Sx + Sy * Sy + Sz * Sz
-    sliding = s2 > smax * smax
-    if sliding:
-        sm = math.sqrt(s2)
-        f = smax / sm
-        Sx *= f
-        Sy *= f
-        Sz *= f
-        cs = 0.0  # no shear dashpot while sliding
-        if ks > 0.0:  # Coulomb slip: (|S_trial| - S_max)/k_S at S_max
-            diss += smax * (sm - smax) / ks
-    else:
-        diss += cs * (vtx * vtx + vty * vty + vtz * vtz) * dt
-    hist[k, 0] = Sx
-    hist[k, 1] = Sy
-    hist[k, 2] = Sz
-    return Fn, Sx - cs * vtx, Sy - cs * vty, Sz - cs * vtz, sliding, diss
+    Tx = 0.0
+    Ty = 0.0
+    Tz = 0.0
+    sliding = False
+    if has_shear:
+        Sx = Sx - ks * vtx * dt
+        Sy = Sy - ks * vty * dt
+        Sz = Sz - ks * vtz * dt
+        smax = mu * (Fn if sliding_mode == SLIDING_CS else N) + coh
+        s2 = Sx * Sx + Sy * Sy + Sz * Sz
+        sliding = s2 > smax * smax
+        if sliding:
+            sm = math.sqrt(s2)
+            f = smax / sm
+            Sx *= f
+            Sy *= f
+            Sz *= f
+            cs = 0.0  # no shear dashpot while sliding
+            if ks > 0.0:  # Coulomb slip: (|S_trial| - S_max)/k_S at S_max
+                diss += smax * (sm - smax) / ks
+        else:
+            diss += cs * (vtx * vtx + vty * vty + vtz * vtz) * dt
+        Tx = Sx - cs * vtx
+        Ty = Sy - cs * vty
+        Tz = Sz - cs * vtz
+    return Fn, Tx, Ty, Tz, sliding, diss, Sx, Sy, Sz, N
 
 
 @overload(law_energy3, inline="always")
