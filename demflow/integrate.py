@@ -219,13 +219,14 @@ def sum_and_integrate(Q, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, 
     n = P.shape[0]
     dmax2 = 0.0
     jump2 = 0.0
-    for i in prange(n):
+    for ii in prange(n):
+        i = np.uint64(ii)  # unsigned indices: no wrap-around arithmetic for negative indices
         ri = P[i, 5]
         sx = 0.0
         sy = 0.0
         sm = 0.0
-        for e in range(start[i], start[i + 1]):
-            q = sidx[e]
+        for e in range(start[ii], start[ii + 1]):
+            q = sidx[np.uint64(e)]
             k = q >> 1
             # as the other disc (q odd) the negated force: -x is x·(-1) exactly
             s = 1.0 - 2.0 * (q & 1)

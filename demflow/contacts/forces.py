@@ -53,16 +53,18 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
     """
     m = fin.shape[0]
     nbad = 0
-    for k in prange(m):
-        i = fin[k]
+    for kk in prange(m):
+        k = np.uint64(kk)  # unsigned indices: no wrap-around arithmetic for negative indices (module docstring)
+        i = np.uint64(fin[k])
         j = oth[k]
+        ju = np.uint64(j)  # the other disc's row (j < n)
         xi = P[i, 0]
         yi = P[i, 1]
         ri = P[i, 5]
         ma = int(P[i, 6])
         if j < n:
-            rj = P[j, 5]
-            xj, yj = other_centre(box, sx, sy, k, P[j, 0], P[j, 1])
+            rj = P[ju, 5]
+            xj, yj = other_centre(box, sx, sy, k, P[ju, 0], P[ju, 1])
             dx = xj - xi
             dy = yj - yi
             d2 = dx * dx + dy * dy
@@ -83,12 +85,12 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
             else:
                 ex = 1.0
                 ey = 0.0
-            rvx = P[i, 2] - P[j, 2]
-            rvy = P[i, 3] - P[j, 3]
-            spin = P[i, 4] * ri + P[j, 4] * rj
+            rvx = P[i, 2] - P[ju, 2]
+            rvy = P[i, 3] - P[ju, 3]
+            spin = P[i, 4] * ri + P[ju, 4] * rj
             px = xi + (ri - 0.5 * overlap) * ex
             py = yi + (ri - 0.5 * overlap) * ey
-            mb = int(P[j, 6])
+            mb = int(P[ju, 6])
             rmin = min(ri, rj)
         else:
             w = j - n

@@ -544,14 +544,16 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
         nq = 0
         # stage 1: the distance test
         for k in range(k0, k1):
-            j = pairs.j[k]
+            ku = np.uint64(k)
+            j = pairs.j[ku]
             if j < n:
-                i = pairs.i[k]
-                dx = P[j, 0] + pairs.shift[k, 0] - P[i, 0]
-                dy = P[j, 1] + pairs.shift[k, 1] - P[i, 1]
-                dz = P[j, 2] + pairs.shift[k, 2] - P[i, 2]
+                iu = np.uint64(pairs.i[ku])
+                ju = np.uint64(j)
+                dx = P[ju, 0] + pairs.shift[ku, 0] - P[iu, 0]
+                dy = P[ju, 1] + pairs.shift[ku, 1] - P[iu, 1]
+                dz = P[ju, 2] + pairs.shift[ku, 2] - P[iu, 2]
                 d2 = dx * dx + dy * dy + dz * dz
-                rs = P[i, 9] + P[j, 9]
+                rs = P[iu, 9] + P[ju, 9]
                 if d2 >= rs * rs:
                     if pairs.ovl[k] >= 0.0:  # touching last step (or listed anew): clear it once
                         _apart(pairs, k, -1.0)
@@ -577,9 +579,9 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
         for t in range(nq):
             if qd2[t] < 0.0:
                 continue
-            k = qk[t]
-            i = pairs.i[k]
-            j = pairs.j[k]
+            k = np.uint64(qk[t])
+            i = np.uint64(pairs.i[k])
+            j = np.uint64(pairs.j[k])
             dist = qdist[t]
             ri = P[i, 9]
             rj = P[j, 9]
@@ -604,9 +606,10 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             qr[t] = ri * rj / rs
         # stage 3: the law and the sums, in pair order
         for t in range(nq):
-            k = qk[t]
-            i = pairs.i[k]
+            k = np.uint64(qk[t])
+            i = np.uint64(pairs.i[k])
             j = pairs.j[k]
+            ju = np.uint64(j)  # the other sphere's row (j < n)
             ri = P[i, 9]
             if j >= n + nw:  # a triangle
                 q += 1
@@ -638,15 +641,15 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 ny = qy[t]
                 nz = qz[t]
                 overlap = qd2[t]
-                rj = P[j, 9]
+                rj = P[ju, 9]
                 ai = ri - 0.5 * overlap
                 aj = rj - 0.5 * overlap
                 # contact-point velocities: v + ω × arm (arm_i = ai n, arm_j = -aj n)
                 vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
-                vjx, vjy, vjz = _point_velocity(P, j, -aj, nx, ny, nz)
+                vjx, vjy, vjz = _point_velocity(P, ju, -aj, nx, ny, nz)
                 meff = qm[t]
                 rstar = qr[t]
-                mb = int(P[j, 11])
+                mb = int(P[ju, 11])
                 rmin = min(ri, rj)
             else:
                 p = j - n
@@ -693,22 +696,22 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             FM[i, 4] += ai * cy
             FM[i, 5] += ai * cz
             if j < n:
-                FM[j, 0] -= fx
-                FM[j, 1] -= fy
-                FM[j, 2] -= fz
-                FM[j, 3] += aj * cx
-                FM[j, 4] += aj * cy
-                FM[j, 5] += aj * cz
+                FM[ju, 0] -= fx
+                FM[ju, 1] -= fy
+                FM[ju, 2] -= fz
+                FM[ju, 3] += aj * cx
+                FM[ju, 4] += aj * cy
+                FM[ju, 5] += aj * cz
             else:
                 w = j - n if j < n + nw else tris.wall[j - n - nw]
                 planes.force[w, 0] -= fx
                 planes.force[w, 1] -= fy
                 planes.force[w, 2] -= fz
+            pairs.ovl[k] = overlap
             pairs.fn[k] = Fn
             pairs.ft[k, 0] = Tx
             pairs.ft[k, 1] = Ty
             pairs.ft[k, 2] = Tz
-            pairs.ovl[k] = overlap
             pairs.slide[k] = 1 if sliding else 0
             if recording:
                 energy = law_energy3(law, energy, hist, k, ma, mb, rstar, overlap)

@@ -197,15 +197,15 @@ HISTORY_WIDTH_3D = 8  # T (or u) vector, MD direction e (3), T_rev, MD state (di
 
 
 @njit_inline
-def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, h0, h1, h2, e0, e1, e2, T_rev, state, meff, rstar,
-                   overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
+def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz,
+                   dt):
     """The Hertz-Mindlin force of one 3D contact from the pair's scalar parameters and the contact's history
     (law_force3's contract); returns (Fn, Tx, Ty, Tz, sliding, dissipated) and the history after the step.
 
     E*, G* the effective moduli, mu the Coulomb coefficient, zn/zt the damping ratios, mode TANGENTIAL_*,
-    shear_spring SHEAR_*, cap CAP_*.  History (columns of the pair's row, :data:`HISTORY_WIDTH_3D`): the
+    shear_spring SHEAR_*, cap CAP_*.  ``row``: the contact's history (:data:`HISTORY_WIDTH_3D` values): the
     tangential vector (h0, h1, h2); for Mindlin-Deresiewicz the direction e (e0, e1, e2), T_rev and the
-    state (zeros and unused otherwise).
+    state (passed through unused otherwise).
 
     Scalars in and out, and one return: law_force3's implementation reads the tables and the history row
     and writes the row back.  Numba (0.68) keeps the reference-count updates of an array passed into an
@@ -213,6 +213,7 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, h0, h1, h2, e0, e1
     slower (2.47 against 1.37 ms a step on benchmarks/packing3d.py's 10 000-sphere packing, one thread,
     measured 2026-11-25), and the history array passed here cost an atomic increment and decrement per
     touching pair, 11-14 % of the pass's samples (perf, 2026-11-28, an Intel Xeon host; the same bits)."""
+    h0, h1, h2, e0, e1, e2, T_rev, state = row
     a = math.sqrt(rstar * overlap)
     kn = 2.0 * E * a
     Fe = 4.0 / 3.0 * E * a * overlap
@@ -303,7 +304,7 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, h0, h1, h2, e0, e1
                     Ty -= ct * vty
                     Tz -= ct * vtz
                     diss += ct * (vtx * vtx + vty * vty + vtz * vtz) * dt
-    return Fn, Tx, Ty, Tz, sliding, diss, h0, h1, h2, e0, e1, e2, T_rev, state
+    return Fn, Tx, Ty, Tz, sliding, diss, (h0, h1, h2, e0, e1, e2, T_rev, state)
 
 
 @overload(law_force3, inline="always")
@@ -316,13 +317,13 @@ def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz,
         # values no mode but Mindlin-Deresiewicz uses), and written back by the caller (law_force3's contract)
         mode = law.tangential[ma, mb]
         last = hist.shape[1] - 1
-        Fn, Tx, Ty, Tz, sliding, diss, h0, h1, h2, e0, e1, e2, T_rev, state = hertz_contact3(
+        row = (hist[k, 0], hist[k, 1], hist[k, 2], hist[k, min(3, last)], hist[k, min(4, last)],
+               hist[k, min(5, last)], hist[k, min(6, last)], hist[k, min(7, last)])
+        Fn, Tx, Ty, Tz, sliding, diss, row = hertz_contact3(
             law.Estar[ma, mb], law.Gstar[ma, mb], law.mu[ma, mb], law.zn[ma, mb], law.zt[ma, mb], mode,
-            law.shear_spring, law.cap, hist[k, 0], hist[k, 1], hist[k, 2], hist[k, min(3, last)],
-            hist[k, min(4, last)], hist[k, min(5, last)], hist[k, min(6, last)], hist[k, min(7, last)], meff, rstar,
-            overlap, vn, vtx, vty, vtz, nx, ny, nz, dt)
+            law.shear_spring, law.cap, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt)
         n_row = HISTORY_WIDTH_3D if mode == TANGENTIAL_MD else 3
-        return Fn, Tx, Ty, Tz, sliding, diss, (h0, h1, h2, e0, e1, e2, T_rev, state), n_row
+        return Fn, Tx, Ty, Tz, sliding, diss, row, n_row
     return impl
 
 
