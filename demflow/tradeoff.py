@@ -99,27 +99,29 @@ def run_observed(job) -> dict:
 REPEAT = "reference (repeat)"
 
 
+def _relative_difference(table: pd.DataFrame, run: str, cost: str) -> float:
+    """|t_run - t_ref| / t_ref of the reference's cost (column ``cost``: seconds) and run ``run``'s; 0 without either
+    row, a positive reference time or a finite time of ``run``."""
+    ref = table[table.run == "reference"][cost]
+    other = table[table.run == run][cost]
+    if ref.empty or other.empty or not float(ref.iloc[0]) > 0 or not math.isfinite(float(other.iloc[0])):
+        return 0.0
+    return abs(float(other.iloc[0]) - float(ref.iloc[0])) / float(ref.iloc[0])
+
+
 def timing_noise(table: pd.DataFrame, cost: str = "wall_s") -> float:
     """How far apart the costs (column ``cost``: seconds) of two runs doing the same work are in this study: the
     reference runs first and once more last (the repeat: the same parameters, the same steps, the same bits), so
     |t_repeat - t_ref| / t_ref is the host's noise between two runs of the study, over the study's whole duration.
     0 without a repeat run or a reference time."""
-    ref = table[table.run == "reference"][cost]
-    rep = table[table.run == REPEAT][cost]
-    if ref.empty or rep.empty or not float(ref.iloc[0]) > 0:
-        return 0.0
-    return abs(float(rep.iloc[0]) - float(ref.iloc[0])) / float(ref.iloc[0])
+    return _relative_difference(table, REPEAT, cost)
 
 
 def cost_floor(table: pd.DataFrame, cost: str = "wall_s") -> float:
     """How far the chaos floor's run's cost (column ``cost``: seconds) is from the reference's, |t_floor - t_ref| / t_ref:
     a physically irrelevant change moves a run's cost that much (the host's noise, and where the run's length follows
     the trajectory, the work itself).  0 without a floor run or a reference time."""
-    ref = table[table.run == "reference"][cost]
-    fl = table[table.run == "chaos floor"][cost]
-    if ref.empty or fl.empty or not float(ref.iloc[0]) > 0 or not math.isfinite(float(fl.iloc[0])):
-        return 0.0
-    return abs(float(fl.iloc[0]) - float(ref.iloc[0])) / float(ref.iloc[0])
+    return _relative_difference(table, "chaos floor", cost)
 
 
 def cost_noise(table: pd.DataFrame, cost: str = "wall_s") -> float:

@@ -39,7 +39,7 @@ from .base import Case, CaseRun, Check
 def _floor_cost(fl, ref, s) -> str:
     """The chaos floor's cost against the reference's, as the floor's line states it: the relative difference of the
     cost compared and, where both record them, the particle-steps each did (the work itself may follow the chaos)."""
-    if getattr(s, "cost_floor", None) is None:
+    if s.cost_floor is None:  # a study without a floor run
         return ""
     text = f"; its {'simulation' if s.cost == 'sim_s' else 'wall'} time is {s.cost_floor:.0%} from the reference's"
     a, b = float(fl.get("particle_steps", math.nan)), float(ref.get("particle_steps", math.nan))

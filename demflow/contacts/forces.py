@@ -13,7 +13,10 @@ The kernel is one loop for every law and every box: the law's compiled functions
 (:mod:`demflow.laws.base`) and the box's image rule (:func:`demflow.space.other_centre`) are
 selected by the types of the ``law`` and ``box`` structures when the cycle is compiled.
 Helpers called per pair receive scalars or are inlined, because every array handed to a compiled
-call costs reference-count updates, which are atomic and serialise threads.
+call costs reference-count updates, which are atomic and serialise threads.  Rows are indexed with unsigned
+integers (``np.uint64``): for a signed index Numba adds the arithmetic that makes a negative one count from the
+end, which LLVM cannot drop when the index is loaded from the pair list (with the sums' indices, 5 % of the 2D
+step at 1e4 discs: benchmarks/results/speed2d_session34_ab.md).
 """
 from __future__ import annotations
 

@@ -207,12 +207,13 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, 
     tangential vector (h0, h1, h2); for Mindlin-Deresiewicz the direction e (e0, e1, e2), T_rev and the
     state (passed through unused otherwise).
 
-    Scalars in and out, and one return: law_force3's implementation reads the tables and the history row
-    and writes the row back.  Numba (0.68) keeps the reference-count updates of an array passed into an
+    Scalars in and out, and one return: law_force3's implementation reads the tables and the history row,
+    and the pair pass writes the row back.  Numba (0.68) keeps the reference-count updates of an array passed into an
     inlined body whose uses end in several branches: the tables read here made the whole pair pass 1.8x
     slower (2.47 against 1.37 ms a step on benchmarks/packing3d.py's 10 000-sphere packing, one thread,
     measured 2026-11-25), and the history array passed here cost an atomic increment and decrement per
-    touching pair, 11-14 % of the pass's samples (perf, 2026-11-28, an Intel Xeon host; the same bits)."""
+    touching pair, 11-14 % of the pass's samples (perf, 2026-11-28, an Intel Xeon host; the same bits), and
+    returning the row took 6 % off the step at 1e4 spheres (benchmarks/results/speed3d_history_row_ab.md)."""
     h0, h1, h2, e0, e1, e2, T_rev, state = row
     a = math.sqrt(rstar * overlap)
     kn = 2.0 * E * a
