@@ -510,8 +510,11 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     The pass runs in blocks of BLOCK listed pairs, in three stages, so that the square roots and divisions of
     many pairs are in flight at once (one touching pair is a few hundred instructions whose chain of square
     roots and divisions is longer than the processor's reordering window; pair by pair they ran one after
-    the other): (1) the distance test of every sphere pair, the pairs found apart handled there, the rest
-    queued in pair order with planes and triangles; (2) for the queued sphere pairs the distance, normal and
+    the other): (1) the distance test of every sphere pair, without a branch on its outcome (in a dense packing it
+    is a coin toss; its mispredictions cost 5-11 % of the step at 1e4 and 1e5 spheres:
+    benchmarks/results/speed3d_session35_ab.md), the pairs touching queued in pair order with planes and
+    triangles, the pairs apart that have something to write (just parted, listed anew, or a recording step)
+    listed and handled after the test; (2) for the queued sphere pairs the distance, normal and
     overlap, and the history turned into the new tangent plane; (3) in pair order, the law and the sums.
     Each pair's arithmetic, and the order of every sum, are those of one pass pair by pair: the same bits.  Rows are
     indexed with unsigned integers (as in :mod:`demflow.contacts.forces`), and the law returns the contact's new
@@ -534,6 +537,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     q = -1
     m = pairs.i.shape[0]
     qk = np.empty(BLOCK, np.int64)  # the queued pairs of a block, in pair order
+    rk = np.empty(BLOCK, np.int64)  # the block's pairs apart with something to write (stage 1)
     qx = np.empty(BLOCK)  # sphere pairs: d (stage 1), then n (stage 2); planes and triangles: qd2 = -1
     qy = np.empty(BLOCK)
     qz = np.empty(BLOCK)
@@ -545,6 +549,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     for k0 in range(0, m, BLOCK):
         k1 = min(k0 + BLOCK, m)
         nq = 0
+        nr = 0
         # stage 1: the distance test
         for k in range(k0, k1):
             ku = np.uint64(k)
@@ -557,22 +562,40 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 dz = P[ju, 2] + pairs.shift[ku, 2] - P[iu, 2]
                 d2 = dx * dx + dy * dy + dz * dz
                 rs = P[iu, 9] + P[ju, 9]
-                if d2 >= rs * rs:
-                    if pairs.ovl[k] >= 0.0:  # touching last step (or listed anew): clear it once
-                        _apart(pairs, k, -1.0)
-                    if recording:
-                        pairs.ovl[k] = rs - math.sqrt(d2)
-                    elif pairs.ovl[k] != -1.0:  # written once, not every step (0.13 ms a step on 35 000 such pairs)
-                        pairs.ovl[k] = -1.0
-                    continue
-                qx[nq] = dx
-                qy[nq] = dy
-                qz[nq] = dz
-                qd2[nq] = d2
-            else:
-                qd2[nq] = -1.0
-            qk[nq] = k
+                # no branch on the test (a coin toss in a dense packing, whose mispredictions cost more than the
+                # work): the pair is written to the queue's next slot, which it keeps if touching; a pair apart
+                # with something to write (just parted, listed anew, or a recording step) is listed for later
+                apart = np.int64(d2 >= rs * rs)
+                slot = np.uint64(nq)
+                qx[slot] = dx
+                qy[slot] = dy
+                qz[slot] = dz
+                qd2[slot] = d2
+                qk[slot] = k
+                nq += 1 - apart
+                rk[np.uint64(nr)] = k
+                nr += apart * np.int64(recording | (pairs.ovl[ku] != -1.0))
+                continue
+            slot = np.uint64(nq)
+            qd2[slot] = -1.0
+            qk[slot] = k
             nq += 1
+        for t in range(nr):  # the pairs apart with something to write
+            k = rk[t]
+            ku = np.uint64(k)
+            iu = np.uint64(pairs.i[ku])
+            ju = np.uint64(pairs.j[ku])
+            dx = P[ju, 0] + pairs.shift[ku, 0] - P[iu, 0]
+            dy = P[ju, 1] + pairs.shift[ku, 1] - P[iu, 1]
+            dz = P[ju, 2] + pairs.shift[ku, 2] - P[iu, 2]
+            d2 = dx * dx + dy * dy + dz * dz
+            rs = P[iu, 9] + P[ju, 9]
+            if pairs.ovl[ku] >= 0.0:  # touching last step (or listed anew): clear it once
+                _apart(pairs, ku, -1.0)
+            if recording:
+                pairs.ovl[ku] = rs - math.sqrt(d2)
+            elif pairs.ovl[ku] != -1.0:  # written once, not every step (0.13 ms a step on 35 000 such pairs)
+                pairs.ovl[ku] = -1.0
         # stage 2: normal, overlap and the history's turn of the queued sphere pairs; the roots and
         # reciprocals first, in a loop without branches (compiled to vector instructions)
         for t in range(nq):
