@@ -511,7 +511,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     many pairs are in flight at once (one touching pair is a few hundred instructions whose chain of square
     roots and divisions is longer than the processor's reordering window; pair by pair they ran one after
     the other): (1) the distance test of every sphere pair, without a branch on its outcome (in a dense packing it
-    is a coin toss; its mispredictions cost 5-11 % of the step at 1e4 and 1e5 spheres:
+    is a coin toss; its mispredictions cost 5-12 % of the step at 1e4 and 1e5 spheres:
     benchmarks/results/speed3d_session35_ab.md), the pairs touching queued in pair order with planes and
     triangles, the pairs apart that have something to write (just parted, listed anew, or a recording step)
     listed and handled after the test; (2) for the queued sphere pairs the distance, normal and
