@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+import golden3d_laws as gl  # noqa: E402
 import golden3d_scenes as g3  # noqa: E402
 from test_golden import assert_same_bits  # noqa: E402
 
@@ -48,12 +49,10 @@ def test_ellipsoid_pair_geometry_bits():
     assert done.stdout.strip().splitlines()[-1] == "same", done.stdout[-2000:]
 
 
-@pytest.mark.parametrize("name", ["md", "md-elastic-cap", "total", "linear"])
+@pytest.mark.parametrize("name", gl.VARIANTS)
 def test_golden3d_law_variant_bits(name):
     """The 3D law variants the golden bed does not run (tests/golden3d_laws.py), to the bit against the code of
     91c46a5: Mindlin-Deresiewicz's 8-column history, the total shear spring, the linear 3D law."""
-    import golden3d_laws as gl
-
     import demflow
 
     sim = demflow.build(gl.scene(name))
