@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
-from .contacts.spheres import carry_history, sphere_pairs
+from .contacts.spheres import carry_index, carry_rows, carry_values, sphere_pairs
 from .progress import bar as progress_bar
 from .scene import EnergyBalanceWarning, SceneError, UnsafeTimeStepWarning, check_whole
 from .simulation import ENERGY_ROUND_OFF, BlowUpError
@@ -106,17 +106,22 @@ class Simulation3D:
                 b.pos[:, a] -= kb * length
                 sp.pos[:, a] -= k * length
                 sp.img[:, a] += k
-        i, j, shift = sphere_pairs(sp.pos, sp.r, self.skin, self.box, self.planes.point, self.planes.normal,
-                                   self.planes.is_mesh, self.tris.v, sp.body, self.tris.imaged)
         old = self.pairs
-        w = old.hist.shape[1]
+        i, j, shift = sphere_pairs(sp.pos, sp.r, self.skin, self.box, self.planes.point, self.planes.normal,
+                                   self.planes.is_mesh, self.tris.v, sp.body, self.tris.imaged,
+                                   capacity=old.i.size + old.i.size // 8 + 64)
         # the history, and the last step's forces, overlaps and sliding flags (what a reader of the contacts sees
-        # until the next step: a run that ends on a rebuild would otherwise show no contact at all)
-        carried = carry_history(old.i, old.j, np.column_stack([old.hist, old.fn, old.ft, old.ovl, old.slide]), i, j,
-                                self.n + self.n_planes + self.tris.v.shape[0])
-        self.pairs = Pairs3(i=i, j=j, hist=np.ascontiguousarray(carried[:, :w]), shift=shift,
-                            fn=np.ascontiguousarray(carried[:, w]), ft=np.ascontiguousarray(carried[:, w + 1:w + 4]),
-                            ovl=np.ascontiguousarray(carried[:, w + 4]), slide=carried[:, w + 5].astype(np.int8))
+        # until the next step: a run that ends on a rebuild would otherwise show no contact at all), by pair key
+        src = carry_index(old.i, old.j, i, j, self.n + self.n_planes + self.tris.v.shape[0])
+        m = i.size
+        new = Pairs3(i=i, j=j, hist=np.empty((m, old.hist.shape[1])), shift=shift, fn=np.empty(m),
+                     ft=np.empty((m, 3)), ovl=np.empty(m), slide=np.empty(m, np.int8))
+        carry_rows(src, old.hist, new.hist)
+        carry_values(src, old.fn, new.fn)
+        carry_rows(src, old.ft, new.ft)
+        carry_values(src, old.ovl, new.ovl)
+        carry_values(src, old.slide, new.slide)
+        self.pairs = new
         sp.ref[:] = sp.pos
         self.planes.ref[:] = self.planes.point
         self.n_rebuilds += 1

@@ -140,6 +140,11 @@ def test_sphere_pairs_match_brute_force(px, py):
     slow = sphere_pairs_brute_force(pos, r, 0.1, box, pp, pn)
     for a, b in zip(fast, slow):
         np.testing.assert_array_equal(a, b)
+        assert a.tobytes() == b.tobytes()  # to the bit: the shifts' signed zeros too
+    # the one-pass search with too little room (a second pass) and with too much (trimmed): the same list
+    for room in (0, 1, 10 * len(fast[0])):
+        for a, b in zip(sphere_pairs(pos, r, 0.1, box, pp, pn, capacity=room), slow):
+            assert a.tobytes() == b.tobytes()
     assert len(fast[0]) > 50 and (fast[1] >= n).any()  # sphere pairs and plane pairs were listed
     if px:
         assert fast[2][:, 0].any()  # and pairs across the periodic boundary

@@ -243,9 +243,10 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, 
                 Tz = h2 - kt * vtz * dt
         else:
             # Mindlin-Deresiewicz along the contact's first direction of motion e
-            ex = e0 - (e0 * nx + e1 * ny + e2 * nz) * nx
-            ey = e1 - (e0 * nx + e1 * ny + e2 * nz) * ny
-            ez = e2 - (e0 * nx + e1 * ny + e2 * nz) * nz
+            e_dot_n = e0 * nx + e1 * ny + e2 * nz
+            ex = e0 - e_dot_n * nx
+            ey = e1 - e_dot_n * ny
+            ez = e2 - e_dot_n * nz
             en = math.sqrt(ex * ex + ey * ey + ez * ez)
             vt = math.sqrt(vtx * vtx + vty * vty + vtz * vtz)
             if en == 0.0:

@@ -239,9 +239,14 @@ def _linear_energy3(law, e, hist, k, ma, mb, rstar, overlap):
         return None
 
     def impl(law, e, hist, k, ma, mb, rstar, overlap):
+        # the row read at once, before any branch (an array read across branches keeps Numba's reference counts:
+        # hertz_mindlin.hertz_contact3)
+        h0 = hist[k, 0]
+        h1 = hist[k, 1]
+        h2 = hist[k, 2]
         e += 0.5 * hist[k, 3] ** 2 / law.kn[ma, mb]
         if law.has_shear and law.ks[ma, mb] > 0.0:
-            e += 0.5 * (hist[k, 0] ** 2 + hist[k, 1] ** 2 + hist[k, 2] ** 2) / law.ks[ma, mb]
+            e += 0.5 * (h0 ** 2 + h1 ** 2 + h2 ** 2) / law.ks[ma, mb]
         return e
     return impl
 
