@@ -288,8 +288,8 @@ def sphere_pairs(pos: np.ndarray, r: np.ndarray, skin: float, box, planes_point:
     (j = n + n_walls + triangle) whose closest point is within r + skin.  ``shift``: the image
     shift of the other sphere, or of the triangle (those with ``tri_imaged`` set, in a periodic box:
     the particle meets the triangle at vertices + shift); zero for planes.  ``capacity``: room for this many
-    sphere pairs in the first pass (a rebuild passes the last list's length; default 6 n + 64); a longer list
-    costs a second pass, a shorter one a copy."""
+    sphere pairs in the first pass (a rebuild passes the last list's length plus an eighth and 64; default
+    6 n + 64); a longer list costs a second pass, a shorter one a copy."""
     n = pos.shape[0]
     side0 = 2.0 * (float(r.max()) if n else 1.0) + skin
     periodic = np.array([box.periodic_x, box.periodic_y, False])
