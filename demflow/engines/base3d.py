@@ -56,7 +56,7 @@ def scene3d_numbers(scene, sim) -> dict:
     a rigid plane material (E = ∞) is kept as ``rigid`` with no modulus (each deck says how it
     expresses it).
     """
-    from ..laws.hertz_mindlin import CAP_TOTAL, SHEAR_TOTAL, TANGENTIAL_MD, TANGENTIAL_MINDLIN, HertzParams
+    from ..laws.hertz_mindlin import CAP_TOTAL, HERTZ_PARAMS_TYPES, SHEAR_TOTAL, TANGENTIAL_MD, TANGENTIAL_MINDLIN
 
     check_identifier("scene", scene.name)
     if getattr(scene, "ellipsoids", None) is not None:
@@ -70,7 +70,7 @@ def scene3d_numbers(scene, sim) -> dict:
             "demflow, or give the walls as planes")
     names = [check_identifier("material", m) for m in scene.materials]
     law = sim.law_params
-    if not isinstance(law, HertzParams):
+    if not isinstance(law, HERTZ_PARAMS_TYPES):
         raise EngineUnsupported(
             f"scene {scene.name!r} uses the linear law in 3D; the 3D engine decks express the Hertz-Mindlin law "
             "only (capabilities feature 'linear-law-3d'): give every pair a HertzMindlinLaw")

@@ -191,19 +191,32 @@ HertzParams = namedtuple("HertzParams", [
     "shear_spring",    # SHEAR_* (scene-wide)
     "cap",             # CAP_* (scene-wide)
 ])
-"""Parameters of the Hertz-Mindlin law as the compiled cycle sees them (see :mod:`demflow.laws.base`)."""
+"""Parameters of the Hertz-Mindlin law as the compiled cycle sees them (see :mod:`demflow.laws.base`), for a
+scene none of whose material pairs uses Mindlin-Deresiewicz: its pair pass is compiled without that branch."""
+
+HertzParamsMD = namedtuple("HertzParamsMD", HertzParams._fields)
+"""The same fields as :data:`HertzParams`, for a scene some of whose material pairs use Mindlin-Deresiewicz
+(``tangential == TANGENTIAL_MD``): the one type whose pair pass compiles that branch.  The tangential mode is a table
+per material pair, read per contact; which of the two types a scene gets is settled once, by
+:meth:`HertzMindlin.params`, so a scene without Mindlin-Deresiewicz pays nothing for it: the branch, dead but
+compiled into the inlined law, made the pair pass's loop larger, and leaving it out took 4-7 % off the 3D benchmark
+step (benchmarks/results/speed3d_session37_ab.md)."""
+
+HERTZ_PARAMS_TYPES = (HertzParams, HertzParamsMD)
 
 HISTORY_WIDTH_3D = 8  # T (or u) vector, MD direction e (3), T_rev, MD state (direction·(1 + on_branch))
 
 
 @njit_inline
 def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz,
-                   dt):
+                   dt, with_md=True):
     """The Hertz-Mindlin force of one 3D contact from the pair's scalar parameters and the contact's history
     (law_force3's contract); returns (Fn, Tx, Ty, Tz, sliding, dissipated) and the history after the step.
 
     E*, G* the effective moduli, mu the Coulomb coefficient, zn/zt the damping ratios, mode TANGENTIAL_*,
-    shear_spring SHEAR_*, cap CAP_*.  ``row``: the contact's history (:data:`HISTORY_WIDTH_3D` values): the
+    shear_spring SHEAR_*, cap CAP_*.  ``with_md``: a compile-time constant, False where no contact can be
+    Mindlin-Deresiewicz (:data:`HertzParamsMD`): the branch is then not compiled, and a ``mode`` of
+    TANGENTIAL_MD would be taken as TANGENTIAL_MINDLIN (the parameters' type rules that out).  ``row``: the contact's history (:data:`HISTORY_WIDTH_3D` values): the
     tangential vector (h0, h1, h2); for Mindlin-Deresiewicz the direction e (e0, e1, e2), T_rev and the
     state (passed through unused otherwise).
 
@@ -229,7 +242,7 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, 
     if mode != TANGENTIAL_NONE:
         kt = 8.0 * G * a
         at_rest = False  # Mindlin-Deresiewicz before any tangential motion: the history's force as it is
-        if mode == TANGENTIAL_MINDLIN:
+        if mode == TANGENTIAL_MINDLIN or not with_md:
             if shear_spring == SHEAR_TOTAL:
                 h0 += vtx * dt
                 h1 += vty * dt
@@ -241,7 +254,7 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, 
                 Tx = h0 - kt * vtx * dt
                 Ty = h1 - kt * vty * dt
                 Tz = h2 - kt * vtz * dt
-        else:
+        elif with_md:
             # Mindlin-Deresiewicz along the contact's first direction of motion e
             e_dot_n = e0 * nx + e1 * ny + e2 * nz
             ex = e0 - e_dot_n * nx
@@ -311,8 +324,15 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, 
 
 @overload(law_force3, inline="always")
 def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
-    if not is_params_of(law, HertzParams):
-        return None
+    if is_params_of(law, HertzParams):
+        return _hertz_force3_impl(False)
+    if is_params_of(law, HertzParamsMD):
+        return _hertz_force3_impl(True)
+    return None
+
+
+def _hertz_force3_impl(with_md: bool):
+    """law_force3's implementation for one of the two parameter types; ``with_md`` a constant of the compiled code."""
 
     def impl(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
         # the history row is read here, in one block (columns past the row's width read as its last column,
@@ -323,15 +343,15 @@ def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz,
                hist[k, min(5, last)], hist[k, min(6, last)], hist[k, min(7, last)])
         Fn, Tx, Ty, Tz, sliding, diss, row = hertz_contact3(
             law.Estar[ma, mb], law.Gstar[ma, mb], law.mu[ma, mb], law.zn[ma, mb], law.zt[ma, mb], mode,
-            law.shear_spring, law.cap, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt)
-        n_row = HISTORY_WIDTH_3D if mode == TANGENTIAL_MD else 3
+            law.shear_spring, law.cap, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt, with_md)
+        n_row = HISTORY_WIDTH_3D if with_md and mode == TANGENTIAL_MD else 3
         return Fn, Tx, Ty, Tz, sliding, diss, row, n_row
     return impl
 
 
 @overload(law_energy3, inline="always")
 def _hertz_energy3(law, e, hist, k, ma, mb, rstar, overlap):
-    if not is_params_of(law, HertzParams):
+    if not (is_params_of(law, HertzParams) or is_params_of(law, HertzParamsMD)):
         return None
 
     def impl(law, e, hist, k, ma, mb, rstar, overlap):
@@ -422,9 +442,12 @@ class HertzMindlin(LawFamily):
                              "give every law the same")
         return table[vals.pop()] if vals else 0
 
-    def params(self) -> HertzParams:
-        return HertzParams(**self.tables(), shear_spring=self._scene_wide("shear_spring", _SHEAR),
-                           cap=self._scene_wide("friction_cap", _CAP))
+    def params(self) -> HertzParams | HertzParamsMD:
+        """:data:`HertzParamsMD` when some material pair uses Mindlin-Deresiewicz, else :data:`HertzParams`."""
+        t = self.tables()
+        cls = HertzParamsMD if bool(np.any(t["tangential"] == TANGENTIAL_MD)) else HertzParams
+        return cls(**t, shear_spring=self._scene_wide("shear_spring", _SHEAR),
+                   cap=self._scene_wide("friction_cap", _CAP))
 
     def stiffness_bound(self, law) -> float:
         raise NotImplementedError("Hertz stiffness grows with overlap: use stiffness_at(overlap)")

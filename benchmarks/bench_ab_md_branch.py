@@ -1,0 +1,135 @@
+"""A/B in one process and one package: the 3D cycle with and without the Mindlin-Deresiewicz branch compiled in.
+
+    python benchmarks/bench_ab_md_branch.py [--sizes 10000 100000] [--chunk 300 30] [--rounds 30]
+
+A Hertz-Mindlin scene gets :data:`demflow.laws.hertz_mindlin.HertzParams` when none of its material pairs uses
+Mindlin-Deresiewicz, and its pair pass is compiled without that branch; :data:`HertzParamsMD` (the same fields)
+compiles it.  Here bench_engines3d.py's scene (packing3d.py's dense FCC Hertz sphere packing, which has no
+Mindlin-Deresiewicz pair) is built twice; the second simulation's parameters are given the MD type, values
+unchanged, so it runs the cycle as it was compiled before the split (the branch present and never taken).  Both
+run in alternating chunks of ``--chunk`` steps, the order swapped every round, one thread, so both see the same
+host states and everything else (the package, its other kernels, the arrays' allocator) is the same.
+
+Why not :mod:`bench_ab_inprocess` (a base commit's package imported beside this one): the variant here is a type
+of the same package, so nothing but the branch differs between the two runs (a null run of that tool, HEAD against
+HEAD at 1e4 spheres, 16 rounds of 300 steps, 2026-12-01 on an AMD EPYC host without AVX-512, gave a per-round
+median of 1.030 and a ratio of the minima of 0.969: neither tool resolves a few per cent in one short run).  Reported per size: ns per sphere-step of each (min, 10th percentile,
+median), the per-round ratio (min, median, max), the ratio of the minima, and whether both ended with the same
+bits (they must).  Results: benchmarks/results/<tag>.{json,md}.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE / "benchmarks"))
+
+
+def measure(n: int, chunk: int, rounds: int, warm: int) -> dict:
+    import numba
+
+    import demflow
+    from demflow.laws.hertz_mindlin import HertzParams, HertzParamsMD
+    from packing3d import dense_fcc
+
+    numba.set_num_threads(1)
+    sims = {"with MD branch": demflow.build(dense_fcc(n)), "without": demflow.build(dense_fcc(n))}
+    with_md = sims["with MD branch"]
+    if not isinstance(with_md.law_params, HertzParams):
+        raise RuntimeError(f"the benchmark scene's parameters are {type(with_md.law_params).__name__}, not HertzParams")
+    with_md.law_params = HertzParamsMD(*with_md.law_params)
+    for s in sims.values():
+        s.run(warm)
+    ts = {k: [] for k in sims}
+    for r in range(rounds):
+        order = list(sims) if r % 2 == 0 else list(reversed(list(sims)))
+        for k in order:
+            t0 = time.perf_counter()
+            sims[k].run(chunk)
+            ts[k].append(time.perf_counter() - t0)
+    a, b = sims["with MD branch"], sims["without"]
+    same = all(np.array_equal(u, v) for u, v in ((a.spheres.pos, b.spheres.pos), (a.spheres.vel, b.spheres.vel),
+                                                   (a.spheres.angvel, b.spheres.angvel), (a.pairs.hist, b.pairs.hist)))
+    row = dict(n=n, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds=int(b.n_rebuilds), same_bits=bool(same))
+    for k, v in ts.items():
+        ns = np.array(v) / chunk / n * 1e9
+        row[k] = dict(min=float(ns.min()), p10=float(np.percentile(ns, 10)), median=float(np.median(ns)),
+                      rounds=[float(x) for x in ns])
+    ratio = np.array(ts["without"]) / np.array(ts["with MD branch"])
+    row["ratio_rounds"] = dict(min=float(ratio.min()), median=float(np.median(ratio)), max=float(ratio.max()))
+    row["ratio_of_minima"] = row["without"]["min"] / row["with MD branch"]["min"]
+    return row
+
+
+def markdown(data: dict) -> str:
+    i = data["info"]
+    out = [f"# 3D cycle without / with the Mindlin-Deresiewicz branch, one process, one package ({i['date']})", "",
+           f"Code {i['head'][:7]}{' + working tree changes' if i['dirty'] else ''}; command `{i['command']}`; "
+           f"{i['cores']} cores, {i['cpu']}, numba {i['numba']}, one thread.  {i['notes']}", "",
+           "Scene: packing3d.py's dense FCC Hertz sphere packing (no Mindlin-Deresiewicz pair), built twice; one "
+           "simulation's parameters given the MD type (the branch compiled in, never taken).  Chunks alternate, "
+           "the order swapped each round.  ns per sphere-step (wall clock), over the rounds.", "",
+           "| N | chunk × rounds | with: min | p10 | median | without: min | p10 | median | "
+           "without/with per round (min / median / max) | ratio of minima | same bits | rebuilds |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in data["rows"]:
+        a, b, q = r["with MD branch"], r["without"], r["ratio_rounds"]
+        out.append(f"| {r['n']:,} | {r['chunk']} × {r['rounds']} | {a['min']:.1f} | {a['p10']:.1f} | {a['median']:.1f} | "
+                   f"{b['min']:.1f} | {b['p10']:.1f} | {b['median']:.1f} | {q['min']:.3f} / {q['median']:.3f} / "
+                   f"{q['max']:.3f} | {r['ratio_of_minima']:.3f} | {'yes' if r['same_bits'] else 'NO'} | "
+                   f"{r['rebuilds']} |")
+    return "\n".join(out) + "\n"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 100000])
+    ap.add_argument("--chunk", type=int, nargs="+", default=None,
+                    help="steps per timed chunk, one per size (default 3e6/N: 300 at 1e4, 30 at 1e5)")
+    ap.add_argument("--rounds", type=int, default=30)
+    ap.add_argument("--warm", type=int, default=200, help="untimed steps first (compilation, first rebuilds)")
+    ap.add_argument("--notes", default="")
+    ap.add_argument("--tag", default="speed3d_md_branch_ab")
+    ap.add_argument("--out", default=str(HERE / "benchmarks" / "results"))
+    a = ap.parse_args(argv)
+    chunks = a.chunk or [max(20, int(round(3e6 / n))) for n in a.sizes]
+    if len(chunks) != len(a.sizes):
+        ap.error(f"--chunk takes one value per size ({len(a.sizes)}), got {len(chunks)}")
+    rows = []
+    for n, c in zip(a.sizes, chunks):
+        print(f"N = {n}: {a.rounds} rounds of {c} steps each ...", flush=True)
+        rows.append(measure(n, c, a.rounds, a.warm))
+        r = rows[-1]
+        print(f"  ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "
+              f"same bits {r['same_bits']}", flush=True)
+    import numba
+
+    head = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
+    dirty = bool(subprocess.run(["git", "status", "--porcelain", "demflow"], capture_output=True, text=True,
+                                cwd=HERE).stdout.strip())
+    info = dict(date=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), head=head, dirty=dirty,
+                command="python benchmarks/bench_ab_md_branch.py " + " ".join(sys.argv[1:] if argv is None else argv),
+                notes=a.notes, cores=os.cpu_count(), cpu=platform.processor() or platform.machine(),
+                numba=numba.__version__)
+    data = dict(info=info, rows=rows)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    from demflow.atomic import write_text_atomic
+
+    for path, text in ((out / f"{a.tag}.json", json.dumps(data, indent=2)), (out / f"{a.tag}.md", markdown(data))):
+        write_text_atomic(path, text)
+    print(markdown(data))
+
+
+if __name__ == "__main__":
+    main()
