@@ -83,6 +83,19 @@ def measure(n: int, chunk: int, rounds: int, warm: int, dim: int = 2) -> dict:
         kw = dict(threads=1)
     raw = pickle.dumps(scene)
     sims = {"base": base.build(_load_as(raw, "demflow_base")), "head": demflow.build(_load_as(raw, "demflow"))}
+    ts = alternate(sims, chunk, rounds, warm, **kw)
+    a, b = sims["base"], sims["head"]
+    same = all(np.array_equal(u, v) for u, v in zip(_state(a, dim), _state(b, dim)))
+    reb = "n_rebuilds" if dim == 3 else "rebuilds"
+    row = dict(n=n, dim=dim, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds_base=int(getattr(a, reb)),
+               rebuilds_head=int(getattr(b, reb)), same_bits=bool(same))
+    row.update(timing_summary(ts, chunk, n, "base", "head"))
+    return row
+
+
+def alternate(sims: dict, chunk: int, rounds: int, warm: int, **kw) -> dict:
+    """Run each simulation ``warm`` steps untimed, then ``rounds`` rounds of ``chunk`` steps each, the order of the
+    simulations swapped every round; returns {key: [seconds per round]}."""
     for s in sims.values():
         s.run(warm, **kw)
     ts = {k: [] for k in sims}
@@ -92,19 +105,57 @@ def measure(n: int, chunk: int, rounds: int, warm: int, dim: int = 2) -> dict:
             t0 = time.perf_counter()
             sims[k].run(chunk, **kw)
             ts[k].append(time.perf_counter() - t0)
-    a, b = sims["base"], sims["head"]
-    same = all(np.array_equal(u, v) for u, v in zip(_state(a, dim), _state(b, dim)))
-    reb = "n_rebuilds" if dim == 3 else "rebuilds"
-    row = dict(n=n, dim=dim, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds_base=int(getattr(a, reb)),
-               rebuilds_head=int(getattr(b, reb)), same_bits=bool(same))
+    return ts
+
+
+def timing_summary(ts: dict, chunk: int, n: int, a: str, b: str) -> dict:
+    """ns per particle-step of each run (min, p10, median, rounds), the per-round ratio b/a and the ratio of the
+    minima."""
+    row = {}
     for k, v in ts.items():
         ns = np.array(v) / chunk / n * 1e9
         row[k] = dict(min=float(ns.min()), p10=float(np.percentile(ns, 10)), median=float(np.median(ns)),
                       rounds=[float(x) for x in ns])
-    ratio = np.array(ts["head"]) / np.array(ts["base"])
+    ratio = np.array(ts[b]) / np.array(ts[a])
     row["ratio_rounds"] = dict(min=float(ratio.min()), median=float(np.median(ratio)), max=float(ratio.max()))
-    row["ratio_of_minima"] = row["head"]["min"] / row["base"]["min"]
+    row["ratio_of_minima"] = row[b]["min"] / row[a]["min"]
     return row
+
+
+def table_rows(rows: list, a: str, b: str, rebuilds: str) -> list:
+    """The markdown rows of :func:`markdown`'s table (a, b the two runs' keys; ``rebuilds`` the rebuild count's key)."""
+    out = []
+    for r in rows:
+        x, y, q = r[a], r[b], r["ratio_rounds"]
+        out.append(f"| {r['n']:,} | {r['chunk']} × {r['rounds']} | {x['min']:.1f} | {x['p10']:.1f} | {x['median']:.1f} | "
+                   f"{y['min']:.1f} | {y['p10']:.1f} | {y['median']:.1f} | {q['min']:.3f} / {q['median']:.3f} / "
+                   f"{q['max']:.3f} | {r['ratio_of_minima']:.3f} | {'yes' if r['same_bits'] else 'NO'} | "
+                   f"{r[rebuilds]} |")
+    return out
+
+
+def run_info(script: str, argv, notes: str, **extra) -> dict:
+    """Date, code, command and machine of a run of ``script`` (the results' header)."""
+    import numba
+
+    head = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
+    dirty = bool(subprocess.run(["git", "status", "--porcelain", "demflow"], capture_output=True, text=True,
+                                cwd=HERE).stdout.strip())
+    return dict(date=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), **extra, head=head, dirty=dirty,
+                command=f"python benchmarks/{script} " + " ".join(sys.argv[1:] if argv is None else argv),
+                notes=notes, cores=os.cpu_count(), cpu=platform.processor() or platform.machine(),
+                numba=numba.__version__)
+
+
+def write_results(out: str, tag: str, data: dict, text: str) -> None:
+    """<out>/<tag>.json and .md, written atomically; the markdown printed."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    from demflow.atomic import write_text_atomic
+
+    for path, body in ((out / f"{tag}.json", json.dumps(data, indent=2)), (out / f"{tag}.md", text)):
+        write_text_atomic(path, body)
+    print(text)
 
 
 def markdown(data: dict) -> str:
@@ -121,12 +172,7 @@ def markdown(data: dict) -> str:
            "| N | chunk × rounds | base min | base p10 | base median | head min | head p10 | head median | "
            "head/base per round (min / median / max) | ratio of minima | same bits | rebuilds |",
            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in data["rows"]:
-        b, h, q = r["base"], r["head"], r["ratio_rounds"]
-        out.append(f"| {r['n']:,} | {r['chunk']} × {r['rounds']} | {b['min']:.1f} | {b['p10']:.1f} | {b['median']:.1f} | "
-                   f"{h['min']:.1f} | {h['p10']:.1f} | {h['median']:.1f} | {q['min']:.3f} / {q['median']:.3f} / "
-                   f"{q['max']:.3f} | {r['ratio_of_minima']:.3f} | {'yes' if r['same_bits'] else 'NO'} | "
-                   f"{r['rebuilds_head']} |")
+    out += table_rows(data["rows"], "base", "head", "rebuilds_head")
     return "\n".join(out) + "\n"
 
 
@@ -157,23 +203,9 @@ def main(argv=None):
             print(f"  base min {r['base']['min']:.1f} head min {r['head']['min']:.1f} ns/p-step, "
                   f"ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "
                   f"same bits {r['same_bits']}", flush=True)
-    import numba
-
-    head = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
-    dirty = bool(subprocess.run(["git", "status", "--porcelain", "demflow"], capture_output=True, text=True,
-                                cwd=HERE).stdout.strip())
-    info = dict(date=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), base=sha, head=head, dirty=dirty,
-                command="python benchmarks/bench_ab_inprocess.py " + " ".join(sys.argv[1:] if argv is None else argv),
-                notes=a.notes, cores=os.cpu_count(), cpu=platform.processor() or platform.machine(),
-                numba=numba.__version__)
+    info = run_info("bench_ab_inprocess.py", argv, a.notes, base=sha)
     data = dict(info=info, rows=rows)
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    from demflow.atomic import write_text_atomic
-
-    for path, text in ((out / f"{a.tag}.json", json.dumps(data, indent=2)), (out / f"{a.tag}.md", markdown(data))):
-        write_text_atomic(path, text)
-    print(markdown(data))
+    write_results(a.out, a.tag, data, markdown(data))
 
 
 if __name__ == "__main__":

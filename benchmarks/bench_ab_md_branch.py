@@ -20,12 +20,7 @@ bits (they must).  Results: benchmarks/results/<tag>.{json,md}.
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import platform
-import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +28,10 @@ import numpy as np
 HERE = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE / "benchmarks"))
+
+from bench_ab_inprocess import alternate, run_info, table_rows, timing_summary, write_results  # noqa: E402
+
+WITH, WITHOUT = "with MD branch", "without"
 
 
 def measure(n: int, chunk: int, rounds: int, warm: int) -> dict:
@@ -43,31 +42,17 @@ def measure(n: int, chunk: int, rounds: int, warm: int) -> dict:
     from packing3d import dense_fcc
 
     numba.set_num_threads(1)
-    sims = {"with MD branch": demflow.build(dense_fcc(n)), "without": demflow.build(dense_fcc(n))}
-    with_md = sims["with MD branch"]
-    if not isinstance(with_md.law_params, HertzParams):
-        raise RuntimeError(f"the benchmark scene's parameters are {type(with_md.law_params).__name__}, not HertzParams")
-    with_md.law_params = HertzParamsMD(*with_md.law_params)
-    for s in sims.values():
-        s.run(warm)
-    ts = {k: [] for k in sims}
-    for r in range(rounds):
-        order = list(sims) if r % 2 == 0 else list(reversed(list(sims)))
-        for k in order:
-            t0 = time.perf_counter()
-            sims[k].run(chunk)
-            ts[k].append(time.perf_counter() - t0)
-    a, b = sims["with MD branch"], sims["without"]
+    sims = {WITH: demflow.build(dense_fcc(n)), WITHOUT: demflow.build(dense_fcc(n))}
+    if not isinstance(sims[WITH].law_params, HertzParams):
+        raise RuntimeError(f"the benchmark scene's parameters are {type(sims[WITH].law_params).__name__}, "
+                           "not HertzParams")
+    sims[WITH].law_params = HertzParamsMD(*sims[WITH].law_params)
+    ts = alternate(sims, chunk, rounds, warm)
+    a, b = sims[WITH], sims[WITHOUT]
     same = all(np.array_equal(u, v) for u, v in ((a.spheres.pos, b.spheres.pos), (a.spheres.vel, b.spheres.vel),
                                                    (a.spheres.angvel, b.spheres.angvel), (a.pairs.hist, b.pairs.hist)))
     row = dict(n=n, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds=int(b.n_rebuilds), same_bits=bool(same))
-    for k, v in ts.items():
-        ns = np.array(v) / chunk / n * 1e9
-        row[k] = dict(min=float(ns.min()), p10=float(np.percentile(ns, 10)), median=float(np.median(ns)),
-                      rounds=[float(x) for x in ns])
-    ratio = np.array(ts["without"]) / np.array(ts["with MD branch"])
-    row["ratio_rounds"] = dict(min=float(ratio.min()), median=float(np.median(ratio)), max=float(ratio.max()))
-    row["ratio_of_minima"] = row["without"]["min"] / row["with MD branch"]["min"]
+    row.update(timing_summary(ts, chunk, n, WITH, WITHOUT))
     return row
 
 
@@ -82,12 +67,7 @@ def markdown(data: dict) -> str:
            "| N | chunk × rounds | with: min | p10 | median | without: min | p10 | median | "
            "without/with per round (min / median / max) | ratio of minima | same bits | rebuilds |",
            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in data["rows"]:
-        a, b, q = r["with MD branch"], r["without"], r["ratio_rounds"]
-        out.append(f"| {r['n']:,} | {r['chunk']} × {r['rounds']} | {a['min']:.1f} | {a['p10']:.1f} | {a['median']:.1f} | "
-                   f"{b['min']:.1f} | {b['p10']:.1f} | {b['median']:.1f} | {q['min']:.3f} / {q['median']:.3f} / "
-                   f"{q['max']:.3f} | {r['ratio_of_minima']:.3f} | {'yes' if r['same_bits'] else 'NO'} | "
-                   f"{r['rebuilds']} |")
+    out += table_rows(data["rows"], WITH, WITHOUT, "rebuilds")
     return "\n".join(out) + "\n"
 
 
@@ -112,23 +92,8 @@ def main(argv=None):
         r = rows[-1]
         print(f"  ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "
               f"same bits {r['same_bits']}", flush=True)
-    import numba
-
-    head = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
-    dirty = bool(subprocess.run(["git", "status", "--porcelain", "demflow"], capture_output=True, text=True,
-                                cwd=HERE).stdout.strip())
-    info = dict(date=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), head=head, dirty=dirty,
-                command="python benchmarks/bench_ab_md_branch.py " + " ".join(sys.argv[1:] if argv is None else argv),
-                notes=a.notes, cores=os.cpu_count(), cpu=platform.processor() or platform.machine(),
-                numba=numba.__version__)
-    data = dict(info=info, rows=rows)
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    from demflow.atomic import write_text_atomic
-
-    for path, text in ((out / f"{a.tag}.json", json.dumps(data, indent=2)), (out / f"{a.tag}.md", markdown(data))):
-        write_text_atomic(path, text)
-    print(markdown(data))
+    data = dict(info=run_info("bench_ab_md_branch.py", argv, a.notes), rows=rows)
+    write_results(a.out, a.tag, data, markdown(data))
 
 
 if __name__ == "__main__":

@@ -518,3 +518,34 @@ def test_a_lone_sphere_builds_and_flies_and_no_law_at_all_is_a_clear_error():
     assert sim.spheres.pos[0, 0] == pytest.approx(10 * sim.dt, rel=1e-12)
     with pytest.raises(df.SceneError, match=r"no particle can touch .* declare one, e\.g\. laws\[\('m', 'm'\)\]"):
         df.build(df.Scene3D(name="one", spheres=one, materials=mats, laws={}, n_steps=10))
+
+
+def test_hertz_parameter_type_compiles_mindlin_deresiewicz_only_where_a_pair_uses_it():
+    """A scene none of whose pairs uses Mindlin-Deresiewicz gets HertzParams (its pair pass compiled without that
+    branch), one with any such pair HertzParamsMD; the two compiled passes give the same bits on a scene without
+    it (the golden bed: planes, a servo plate, a triangle ramp, periodic images, local damping), so the
+    specialised pass is the general one with a branch it never takes left out."""
+    import dataclasses
+    import sys
+    from pathlib import Path
+
+    from demflow.laws.hertz_mindlin import HertzParams, HertzParamsMD
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    import golden3d_scenes as g3
+
+    scene = g3.settling_bed()
+    plain, general = df.build(scene), df.build(scene)
+    assert type(plain.law_params) is HertzParams
+    general.law_params = HertzParamsMD(*general.law_params)
+    plain.run(400)
+    general.run(400)
+    for name in ("pos", "vel", "angvel", "quat"):
+        np.testing.assert_array_equal(getattr(plain.spheres, name), getattr(general.spheres, name), err_msg=name)
+    np.testing.assert_array_equal(plain.pairs.hist, general.pairs.hist)
+    np.testing.assert_array_equal(plain.planes.force, general.planes.force)
+    # one Mindlin-Deresiewicz pair among two: the general type, and the history wide enough for it
+    md = dataclasses.replace(scene.laws[("grain", "steel")], tangential="mindlin-deresiewicz")
+    mixed = df.build(dataclasses.replace(scene, laws={**scene.laws, ("grain", "steel"): md}))
+    assert type(mixed.law_params) is HertzParamsMD
+    assert mixed.pairs.hist.shape[1] == 8

@@ -199,8 +199,8 @@ HertzParamsMD = namedtuple("HertzParamsMD", HertzParams._fields)
 (``tangential == TANGENTIAL_MD``): the one type whose pair pass compiles that branch.  The tangential mode is a table
 per material pair, read per contact; which of the two types a scene gets is settled once, by
 :meth:`HertzMindlin.params`, so a scene without Mindlin-Deresiewicz pays nothing for it: the branch, dead but
-compiled into the inlined law, made the pair pass's loop larger, and leaving it out took 4-7 % off the 3D benchmark
-step (benchmarks/results/speed3d_session37_ab.md)."""
+compiled into the inlined law, made the pair pass's loop larger: without it the 3D benchmark's step took 0.892 and
+0.906 of the time with it at 1e4 and 1e5 spheres (per-round medians; benchmarks/results/speed3d_session37_ab.md)."""
 
 HERTZ_PARAMS_TYPES = (HertzParams, HertzParamsMD)
 
@@ -209,7 +209,7 @@ HISTORY_WIDTH_3D = 8  # T (or u) vector, MD direction e (3), T_rev, MD state (di
 
 @njit_inline
 def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz,
-                   dt, with_md=True):
+                   dt, with_md):
     """The Hertz-Mindlin force of one 3D contact from the pair's scalar parameters and the contact's history
     (law_force3's contract); returns (Fn, Tx, Ty, Tz, sliding, dissipated) and the history after the step.
 
