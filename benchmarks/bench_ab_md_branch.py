@@ -15,7 +15,8 @@ of the same package, so nothing but the branch differs between the two runs (a n
 HEAD at 1e4 spheres, 16 rounds of 300 steps, 2026-12-01 on an AMD EPYC host without AVX-512, gave a per-round
 median of 1.030 and a ratio of the minima of 0.969: neither tool resolves a few per cent in one short run).  Reported per size: ns per sphere-step of each (min, 10th percentile,
 median), the per-round ratio (min, median, max), the ratio of the minima, and whether both ended with the same
-bits (they must).  Results: benchmarks/results/<tag>.{json,md}.
+bits (they must).  ``--null`` gives neither simulation the MD type: the same code twice, whose ratio shows what the
+host's noise alone gives in a run of that length.  Results: benchmarks/results/<tag>.{json,md}.
 """
 from __future__ import annotations
 
@@ -34,7 +35,7 @@ from bench_ab_inprocess import alternate, run_info, table_rows, timing_summary, 
 WITH, WITHOUT = "with MD branch", "without"
 
 
-def measure(n: int, chunk: int, rounds: int, warm: int) -> dict:
+def measure(n: int, chunk: int, rounds: int, warm: int, null: bool = False) -> dict:
     import numba
 
     import demflow
@@ -46,12 +47,14 @@ def measure(n: int, chunk: int, rounds: int, warm: int) -> dict:
     if not isinstance(sims[WITH].law_params, HertzParams):
         raise RuntimeError(f"the benchmark scene's parameters are {type(sims[WITH].law_params).__name__}, "
                            "not HertzParams")
-    sims[WITH].law_params = HertzParamsMD(*sims[WITH].law_params)
+    if not null:  # --null: both keep HertzParams (the tool's own noise: the ratio should be 1 within it)
+        sims[WITH].law_params = HertzParamsMD(*sims[WITH].law_params)
     ts = alternate(sims, chunk, rounds, warm)
     a, b = sims[WITH], sims[WITHOUT]
     same = all(np.array_equal(u, v) for u, v in ((a.spheres.pos, b.spheres.pos), (a.spheres.vel, b.spheres.vel),
                                                    (a.spheres.angvel, b.spheres.angvel), (a.pairs.hist, b.pairs.hist)))
-    row = dict(n=n, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds=int(b.n_rebuilds), same_bits=bool(same))
+    row = dict(n=n, chunk=chunk, rounds=rounds, steps=int(b.step), rebuilds=int(b.n_rebuilds), same_bits=bool(same),
+               null=bool(null))
     row.update(timing_summary(ts, chunk, n, WITH, WITHOUT))
     return row
 
@@ -62,7 +65,9 @@ def markdown(data: dict) -> str:
            f"Code {i['head'][:7]}{' + working tree changes' if i['dirty'] else ''}; command `{i['command']}`; "
            f"{i['cores']} cores, {i['cpu']}, numba {i['numba']}, one thread.  {i['notes']}", "",
            "Scene: packing3d.py's dense FCC Hertz sphere packing (no Mindlin-Deresiewicz pair), built twice; one "
-           "simulation's parameters given the MD type (the branch compiled in, never taken).  Chunks alternate, "
+           "simulation's parameters given the MD type (the branch compiled in, never taken"
+           f"{'; NULL RUN: here neither was, both ran HertzParams' if any(r.get('null') for r in data['rows']) else ''}"
+           ").  Chunks alternate, "
            "the order swapped each round.  ns per sphere-step (wall clock), over the rounds.", "",
            "| N | chunk × rounds | with: min | p10 | median | without: min | p10 | median | "
            "without/with per round (min / median / max) | ratio of minima | same bits | rebuilds |",
@@ -78,6 +83,8 @@ def main(argv=None):
                     help="steps per timed chunk, one per size (default 3e6/N: 300 at 1e4, 30 at 1e5)")
     ap.add_argument("--rounds", type=int, default=30)
     ap.add_argument("--warm", type=int, default=200, help="untimed steps first (compilation, first rebuilds)")
+    ap.add_argument("--null", action="store_true",
+                    help="a null run: neither simulation gets the MD type (the ratio measures the tool's noise)")
     ap.add_argument("--notes", default="")
     ap.add_argument("--tag", default="speed3d_md_branch_ab")
     ap.add_argument("--out", default=str(HERE / "benchmarks" / "results"))
@@ -88,7 +95,7 @@ def main(argv=None):
     rows = []
     for n, c in zip(a.sizes, chunks):
         print(f"N = {n}: {a.rounds} rounds of {c} steps each ...", flush=True)
-        rows.append(measure(n, c, a.rounds, a.warm))
+        rows.append(measure(n, c, a.rounds, a.warm, a.null))
         r = rows[-1]
         print(f"  ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "
               f"same bits {r['same_bits']}", flush=True)

@@ -6,7 +6,8 @@ through one place that once used, or could use, a numpy function compiled per CP
 step (r³), a short run of the 3D golden bed, the ellipsoids' safe step (a surface grid of sines and cosines), the
 3D conformance decks written for YADE and LIGGGHTS, a clump template, the 2D kissing bound (arcsin), the BEM's
 circles and log-weighted quadrature, the one-wall Stokes resistance (arccosh, tanh), the C&S friction (tan) and
-Miyata's rough trimming surface (sin).  ``--control`` adds an entry computed through ``np.tanh`` (the negative
+Miyata's rough trimming surface (sin), and the q-model's maximum-likelihood fit (its likelihood's log
+and exp: the fit's stopping point follows their last bits).  ``--control`` adds an entry computed through ``np.tanh`` (the negative
 control: numpy has CPU-specific code for it on AVX2 and on AVX-512 CPUs).
 """
 from __future__ import annotations
@@ -36,6 +37,7 @@ def digest(*arrays) -> str:
 
 def probe(control: bool) -> dict:
     import demflow as df
+    from demflow.analysis.forces import fit_q_model
     from demflow.bem.geometry import circle
     from demflow.bem.quadrature import log_gauss
     from demflow.cases import conformance_3d as conf
@@ -71,6 +73,9 @@ def probe(control: bool) -> dict:
     nd = nine_disc_scene("probe", kn=1.35e9, ks=1.35e9, phi_deg=26.0, speed=0.12, load_cycles=40, rest_cycles=40)
     out["C&S friction"] = digest([law.friction for law in nd.laws.values()])
     out["Miyata rough surface"] = digest(surface(np.linspace(0.0, 4.0, 101), True))
+    F = np.random.default_rng(11).gamma(2.5, 1.0, 4000)
+    q = fit_q_model(F / F.mean())
+    out["q-model fit (log, exp)"] = digest([q.N, q.ci[0], q.ci[1], q.loglik, q.se])
     if control:
         out["control: np.tanh"] = digest(np.tanh(np.linspace(-5.0, 5.0, 100001)))
     return out

@@ -18,11 +18,14 @@ averages (coordination number, fabric tensor, average stress, ch3 eq 3.17) are i
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
+
+from .. import libm
 
 #: common bins so that distributions of different engines/runs can be compared bin by bin
 LINEAR_BINS = np.round(np.arange(0.0, 6.0 + 1e-12, 0.2), 10)
@@ -230,7 +233,7 @@ def q_model_pdf(f, N):
 
 
 def _q_loglik(N, n, mean_log, mean_f):
-    return n * (N * np.log(N) - special.gammaln(N) + (N - 1.0) * mean_log - N * mean_f)
+    return n * (N * math.log(N) - special.gammaln(N) + (N - 1.0) * mean_log - N * mean_f)
 
 
 @dataclass
@@ -259,16 +262,19 @@ def fit_q_model(f, alpha=0.05, step=None, where="all") -> QModelFit:
     n = f.size
     if n < 3:
         raise ValueError(f"only {n} positive forces")
-    ml, mf = float(np.mean(np.log(f))), float(np.mean(f))
-    nll = lambda u: -_q_loglik(np.exp(u), n, ml, mf)
+    # the C library's log and exp, not numpy's CPU-specific versions (demflow.libm): the likelihood is flat at its
+    # maximum, so Brent's stopping point, N to ~1e-8, followed the last bit of <ln f>, and N differed between an
+    # AVX-512 and an AVX2-only host by up to 3e-8 relative (measured 2026-12-01 on miyata-uniaxial-3d's fits)
+    ml, mf = float(np.mean(libm.log(f))), float(np.mean(f))
+    nll = lambda u: -_q_loglik(math.exp(u), n, ml, mf)
     # ln N - ψ(N) = ln <f> - <ln f> has one root; Brent on a bracket in ln N
-    s = np.log(mf) - ml
+    s = math.log(mf) - ml
     if s <= 0:
         raise ValueError("all forces are equal: N is infinite")
-    res = optimize.minimize_scalar(nll, bracket=(np.log(0.5 / s), np.log(1.0 / s)), method="brent",
+    res = optimize.minimize_scalar(nll, bracket=(math.log(0.5 / s), math.log(1.0 / s)), method="brent",
                                    options=dict(xtol=1e-12))
     u_hat = float(res.x)
-    N = float(np.exp(u_hat))
+    N = math.exp(u_hat)
     l_hat = -float(res.fun)
     crit = 0.5 * stats.chi2.ppf(1 - alpha, 1)
     g = lambda u: (l_hat - (-nll(u))) - crit
@@ -277,8 +283,8 @@ def fit_q_model(f, alpha=0.05, step=None, where="all") -> QModelFit:
         lo_u -= 0.5
     while g(hi_u) < 0:
         hi_u += 0.5
-    lo = float(np.exp(optimize.brentq(g, lo_u, u_hat, xtol=1e-12)))
-    hi = float(np.exp(optimize.brentq(g, u_hat, hi_u, xtol=1e-12)))
+    lo = math.exp(optimize.brentq(g, lo_u, u_hat, xtol=1e-12))
+    hi = math.exp(optimize.brentq(g, u_hat, hi_u, xtol=1e-12))
     se = float(1.0 / np.sqrt(n * (special.polygamma(1, N) - 1.0 / N)))
     ks = stats.kstest(f, "gamma", args=(N, 0.0, 1.0 / N)).pvalue
     return QModelFit(N=N, ci=(lo, hi), se=se, loglik=l_hat, n=int(n), ks_pvalue=float(ks))
