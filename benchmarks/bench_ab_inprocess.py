@@ -93,6 +93,22 @@ def measure(n: int, chunk: int, rounds: int, warm: int, dim: int = 2) -> dict:
     return row
 
 
+def per_size(ap, a, work: float, measure_one) -> list:
+    """``measure_one(n, chunk)`` for each of ``a.sizes``, with ``a.chunk`` or the default chunk work/N steps (at
+    least 20; a wrong count of ``--chunk`` values is refused through ``ap``), each row's ratios printed."""
+    chunks = a.chunk or [max(20, int(round(work / n))) for n in a.sizes]
+    if len(chunks) != len(a.sizes):
+        ap.error(f"--chunk takes one value per size ({len(a.sizes)}), got {len(chunks)}")
+    rows = []
+    for n, c in zip(a.sizes, chunks):
+        print(f"N = {n}: {a.rounds} rounds of {c} steps each ...", flush=True)
+        rows.append(measure_one(n, c))
+        r = rows[-1]
+        print(f"  ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "
+              f"same bits {r['same_bits']}", flush=True)
+    return rows
+
+
 def alternate(sims: dict, chunk: int, rounds: int, warm: int, **kw) -> dict:
     """Run each simulation ``warm`` steps untimed, then ``rounds`` rounds of ``chunk`` steps each, the order of the
     simulations swapped every round; returns {key: [seconds per round]}."""
@@ -189,20 +205,10 @@ def main(argv=None):
     ap.add_argument("--tag", default="speed2d_inprocess_ab")
     ap.add_argument("--out", default=str(HERE / "benchmarks" / "results"))
     a = ap.parse_args(argv)
-    chunks = a.chunk or [max(20, int(round(1e7 / n))) for n in a.sizes]
-    if len(chunks) != len(a.sizes):
-        ap.error(f"--chunk takes one value per size ({len(a.sizes)}), got {len(chunks)}")
     with tempfile.TemporaryDirectory() as tmp:
         sha = _base_package(a.base, Path(tmp))
         sys.path.insert(0, tmp)
-        rows = []
-        for n, c in zip(a.sizes, chunks):
-            print(f"N = {n}: {a.rounds} rounds of {c} steps each ...", flush=True)
-            rows.append(measure(n, c, a.rounds, a.warm, a.dim))
-            r = rows[-1]
-            print(f"  base min {r['base']['min']:.1f} head min {r['head']['min']:.1f} ns/p-step, "
-                  f"ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "
-                  f"same bits {r['same_bits']}", flush=True)
+        rows = per_size(ap, a, 1e7, lambda n, c: measure(n, c, a.rounds, a.warm, a.dim))
     info = run_info("bench_ab_inprocess.py", argv, a.notes, base=sha)
     data = dict(info=info, rows=rows)
     write_results(a.out, a.tag, data, markdown(data))

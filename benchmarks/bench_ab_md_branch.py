@@ -30,7 +30,7 @@ HERE = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE / "benchmarks"))
 
-from bench_ab_inprocess import alternate, run_info, table_rows, timing_summary, write_results  # noqa: E402
+from bench_ab_inprocess import alternate, per_size, run_info, table_rows, timing_summary, write_results  # noqa: E402
 
 WITH, WITHOUT = "with MD branch", "without"
 
@@ -89,16 +89,7 @@ def main(argv=None):
     ap.add_argument("--tag", default="speed3d_md_branch_ab")
     ap.add_argument("--out", default=str(HERE / "benchmarks" / "results"))
     a = ap.parse_args(argv)
-    chunks = a.chunk or [max(20, int(round(3e6 / n))) for n in a.sizes]
-    if len(chunks) != len(a.sizes):
-        ap.error(f"--chunk takes one value per size ({len(a.sizes)}), got {len(chunks)}")
-    rows = []
-    for n, c in zip(a.sizes, chunks):
-        print(f"N = {n}: {a.rounds} rounds of {c} steps each ...", flush=True)
-        rows.append(measure(n, c, a.rounds, a.warm, a.null))
-        r = rows[-1]
-        print(f"  ratio of minima {r['ratio_of_minima']:.3f}, per-round median {r['ratio_rounds']['median']:.3f}, "
-              f"same bits {r['same_bits']}", flush=True)
+    rows = per_size(ap, a, 3e6, lambda n, c: measure(n, c, a.rounds, a.warm, a.null))
     data = dict(info=run_info("bench_ab_md_branch.py", argv, a.notes), rows=rows)
     write_results(a.out, a.tag, data, markdown(data))
 

@@ -351,7 +351,7 @@ def _hertz_force3_impl(with_md: bool):
 
 @overload(law_energy3, inline="always")
 def _hertz_energy3(law, e, hist, k, ma, mb, rstar, overlap):
-    if not (is_params_of(law, HertzParams) or is_params_of(law, HertzParamsMD)):
+    if not any(is_params_of(law, cls) for cls in HERTZ_PARAMS_TYPES):
         return None
 
     def impl(law, e, hist, k, ma, mb, rstar, overlap):
