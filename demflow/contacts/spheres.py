@@ -34,19 +34,25 @@ OK = 0
 BLOWUP_OVERLAP = 1
 
 
-@njit
+@njit_inline
 def _cell_of(p, lo, side, nc, periodic):
-    c = np.empty(3, np.int64)
-    for a in range(3):
-        k = int(math.floor((p[a] - lo[a]) / side[a]))
-        if periodic[a]:
-            k %= nc[a]
-        elif k < 0:
-            k = 0
-        elif k >= nc[a]:
-            k = nc[a] - 1
-        c[a] = k
-    return c
+    """The cell (c0, c1, c2) of point p: wrapped along a periodic axis, clamped into the grid along the others."""
+    c0 = _axis_cell(p[0], lo[0], side[0], nc[0], periodic[0])
+    c1 = _axis_cell(p[1], lo[1], side[1], nc[1], periodic[1])
+    c2 = _axis_cell(p[2], lo[2], side[2], nc[2], periodic[2])
+    return c0, c1, c2
+
+
+@njit_inline
+def _axis_cell(x, lo, side, nc, periodic):
+    k = int(math.floor((x - lo) / side))
+    if periodic:
+        k %= nc
+    elif k < 0:
+        k = 0
+    elif k >= nc:
+        k = nc - 1
+    return k
 
 
 @njit
@@ -58,8 +64,8 @@ def _sphere_candidates(pos, r, body, skin, lo, side, nc, periodic, period, out_i
     ncell = nc[0] * nc[1] * nc[2]
     cid = np.empty(n, np.int64)
     for i in range(n):
-        c = _cell_of(pos[i], lo, side, nc, periodic)
-        cid[i] = (c[0] * nc[1] + c[1]) * nc[2] + c[2]
+        c0, c1, c2 = _cell_of(pos[i], lo, side, nc, periodic)
+        cid[i] = (c0 * nc[1] + c1) * nc[2] + c2
     start = np.zeros(ncell + 1, np.int64)
     for i in range(n):
         start[cid[i] + 1] += 1
