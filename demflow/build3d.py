@@ -494,7 +494,8 @@ def build3d(scene: Scene3D) -> Simulation3D:
     refuse_rotational_dashpot(scene, bodies, "clumps")
     # the row layout is measured: with the radius moved beside the position (the distance test then reads one cache
     # line of the other sphere's row, not two) the step at 1e5 spheres took 10 % longer: that test, a loop without
-    # branches, brings in the second line the touching pairs' stages then read (benchmarks/results/speed_experiments_session38.md)
+    # branches, brings in the second line the touching pairs' stages then read
+    # (benchmarks/results/speed_experiments_session38.md)
     P = np.zeros((n, 16))
     P[:, 9] = r
     P[:, 10] = mass
