@@ -1,0 +1,106 @@
+"""Where the 3D pair pass waits: `perf` samples counted per machine instruction of ``sphere_forces``.
+
+    perf record -e cpu-clock:u -F 5000 -o pass.data python benchmarks/perf_pass3d.py run --n 100000 --steps 300 --out pass
+    perf script -i pass.data -F ip > pass.ips
+    python benchmarks/perf_pass3d.py annotate --out pass [--top 30]
+
+``run``: builds packing3d.py's benchmark packing (``dense_fcc(n)``, one thread), runs 200 untimed steps (compilation,
+first rebuild), writes the compiled pass's machine code as it lies in memory (``<out>.bin``, read up to the end of
+its memory mapping, at most 128 KiB) and its address (``<out>.addr``: Numba's ``get_pointer_to_function``), then runs
+``--steps`` steps.  ``annotate``: disassembles ``<out>.bin`` at that address (``objdump``), counts the samples of
+``<out>.ips`` (one instruction pointer a line, from ``perf script -F ip``) per instruction, and writes
+``<out>.annot`` (samples, share of the pass's samples, offset, instruction) and prints the share per 256-byte
+stretch and the hottest instructions.  A sample lands on the instruction that waits to retire, usually the one after
+a long operation (a square root, a division, a load that missed).  Used for
+benchmarks/results/speed_experiments_session38.md.  Needs Linux ``perf`` (cpu-clock: no hardware counters needed)
+and ``objdump``.
+"""
+from __future__ import annotations
+
+import argparse
+import collections
+import ctypes
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE / "benchmarks"))
+
+LIMIT = 1 << 17
+
+
+def run(n: int, steps: int, out: str) -> None:
+    from packing3d import dense_fcc
+
+    from demflow import build
+    from demflow.contacts import spheres
+    from demflow.jit import set_threads
+
+    set_threads(1)
+    sim = build(dense_fcc(n))
+    sim.run(200)
+    (sig, cres), = spheres.sphere_forces.overloads.items()
+    addr = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
+    end = addr + LIMIT
+    for line in open("/proc/self/maps"):
+        lo, hi = (int(x, 16) for x in line.split()[0].split("-"))
+        if lo <= addr < hi:
+            end = min(end, hi)
+    Path(out + ".bin").write_bytes(ctypes.string_at(addr, end - addr))
+    Path(out + ".addr").write_text(f"{addr:#x} {end - addr}\n")
+    t = time.perf_counter()
+    sim.run(steps)
+    print(f"sphere_forces at {addr:#x}; {steps} steps of {n} spheres in {time.perf_counter() - t:.2f} s")
+
+
+def annotate(out: str, top: int) -> None:
+    addr, size = Path(out + ".addr").read_text().split()
+    addr, size = int(addr, 16), int(size)
+    counts = collections.Counter()
+    for line in open(out + ".ips"):
+        ip = int(line.split()[0], 16)
+        if addr <= ip < addr + size:
+            counts[ip - addr] += 1
+    total = sum(counts.values())
+    if not total:
+        sys.exit("no sample falls inside the pass: was <out>.ips recorded from the same run as <out>.addr?")
+    dis = subprocess.run(["objdump", "-D", "-b", "binary", "-m", "i386:x86-64", f"--adjust-vma={addr:#x}",
+                          out + ".bin"], capture_output=True, text=True, check=True).stdout
+    rows = []
+    for line in dis.splitlines():
+        m = re.match(r"\s*([0-9a-f]+):\s", line)
+        if m:
+            off = int(m.group(1), 16) - addr
+            c = counts.get(off, 0)
+            rows.append((c, f"{c:6d} {100 * c / total:6.2f} {off:6x} {line.split(chr(9))[-1].strip()}"))
+    Path(out + ".annot").write_text("\n".join(r for _, r in rows) + "\n")
+    stretch = collections.Counter()
+    for off, c in counts.items():
+        stretch[off // 256] += c
+    print(f"{total} samples in the pass")
+    print("share per 256 bytes: " + " ".join(f"{k * 256:x}:{100 * v / total:.1f}%" for k, v in sorted(stretch.items())
+                                              if v > 0.005 * total))
+    for _, r in sorted(rows, key=lambda x: -x[0])[:top]:
+        print(r)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("mode", choices=("run", "annotate"))
+    ap.add_argument("--n", type=int, default=100000, help="spheres (run)")
+    ap.add_argument("--steps", type=int, default=300, help="steps sampled (run)")
+    ap.add_argument("--out", default="pass", help="prefix of the files written and read")
+    ap.add_argument("--top", type=int, default=30, help="hottest instructions printed (annotate)")
+    a = ap.parse_args(argv)
+    if a.mode == "run":
+        run(a.n, a.steps, a.out)
+    else:
+        annotate(a.out, a.top)
+
+
+if __name__ == "__main__":
+    main()
