@@ -43,7 +43,10 @@ def run(n: int, steps: int, out: str) -> None:
     set_threads(1)
     sim = build(dense_fcc(n))
     sim.run(200)
-    (sig, cres), = spheres.sphere_forces.overloads.items()
+    compiled = list(spheres.sphere_forces.overloads.values())
+    if len(compiled) != 1:
+        sys.exit(f"sphere_forces has {len(compiled)} compiled versions in this process; this tool reads one")
+    cres = compiled[0]
     addr = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
     end = addr + LIMIT
     for line in open("/proc/self/maps"):

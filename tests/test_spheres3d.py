@@ -526,13 +526,9 @@ def test_hertz_parameter_type_compiles_mindlin_deresiewicz_only_where_a_pair_use
     it (the golden bed: planes, a servo plate, a triangle ramp, periodic images, local damping), so the
     specialised pass is the general one with a branch it never takes left out."""
     import dataclasses
-    import sys
-    from pathlib import Path
 
+    import golden3d_scenes as g3  # tests/ is on the path (as for test_manifest.py)
     from demflow.laws.hertz_mindlin import HertzParams, HertzParamsMD
-
-    sys.path.insert(0, str(Path(__file__).parent))
-    import golden3d_scenes as g3
 
     scene = g3.settling_bed()
     plain, general = df.build(scene), df.build(scene)
