@@ -618,7 +618,10 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     Each pair's arithmetic, and the order of every sum, are those of one pass pair by pair: the same bits.  Rows are
     indexed with unsigned integers (as in :mod:`demflow.contacts.forces`), and the law returns the contact's new
     history row, written here (:func:`demflow.laws.base.law_force3`): 14 % less time a step at 1e4 and 1e5 spheres
-    together (benchmarks/results/speed3d_session34_ab.md)."""
+    together (benchmarks/results/speed3d_session34_ab.md).  The law's tables are read with unsigned material indices
+    too: Numba's wrap-around test of a signed index cost 44 of the 370 instructions of a touching pair's path and
+    8.5 % of the pass's instructions (valgrind's callgrind; the step's time moved within the A/B's noise:
+    benchmarks/results/speed_experiments_session39.md)."""
     n = sp.P.shape[0]
     P = sp.P
     FM = sp.FM
@@ -746,7 +749,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 vjz = planes.vel[w, 2]
                 meff = P[i, 10]
                 rstar = ri
-                mb = planes.mat[w]
+                mb = np.uint64(planes.mat[w])
                 rmin = ri
                 rotate_history(hist, k, nx, ny, nz)
             elif j < n:
@@ -762,7 +765,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 vjx, vjy, vjz = _point_velocity(P, ju, -aj, nx, ny, nz)
                 meff = qm[t]
                 rstar = qr[t]
-                mb = int(P[ju, 11])
+                mb = np.uint64(np.int64(P[ju, 11]))
                 rmin = min(ri, rj)
             else:
                 p = j - n
@@ -783,13 +786,13 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 vjz = planes.vel[p, 2]
                 meff = P[i, 10]
                 rstar = ri
-                mb = planes.mat[p]
+                mb = np.uint64(planes.mat[p])
                 rmin = ri
                 rotate_history(hist, k, nx, ny, nz)
             if overlap > max_overlap_ratio * rmin:
                 status = BLOWUP_OVERLAP
             vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
-            ma = int(P[i, 11])
+            ma = np.uint64(np.int64(P[i, 11]))  # unsigned: the law's tables are read without a wrap-around test
             Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row = law_force3(law, hist, k, ma, mb, meff, rstar, overlap,
                                                                          vn, vtx, vty, vtz, nx, ny, nz, dt)
             for c in range(n_row):
