@@ -14,6 +14,21 @@ stretch and the hottest instructions.  A sample lands on the instruction that wa
 a long operation (a square root, a division, a load that missed).  Used for
 benchmarks/results/speed_experiments_session38.md.  Needs Linux ``perf`` (cpu-clock: no hardware counters needed)
 and ``objdump``.
+
+Instructions instead of samples (valgrind's callgrind; benchmarks/results/speed_experiments_session39.md).  Under
+valgrind Numba sees another CPU and would recompile every kernel (half an hour); so compile them natively first into a
+cache of their own with the CPU named, then run the same under valgrind, which loads the host's machine code::
+
+    export NUMBA_CACHE_DIR=/tmp/pass-cache NUMBA_CPU_NAME=znver3 \
+        NUMBA_CPU_FEATURES=$(python -c "import llvmlite.binding as l; print(l.get_host_cpu_features().flatten())")
+    python benchmarks/perf_pass3d.py run --n 10000 --steps 20 --out pass     # fills the cache
+    valgrind --tool=callgrind --dump-instr=yes --callgrind-out-file=pass.cg \
+        python benchmarks/perf_pass3d.py run --n 10000 --steps 20 --out pass
+    python benchmarks/perf_pass3d.py annotate --out pass --callgrind pass.cg
+
+(``NUMBA_CPU_NAME``: the host's, ``python -c "import llvmlite.binding as l; print(l.get_host_cpu_name())"``.)  With
+``--callgrind`` the counts are instructions executed, and the summary groups the instructions by how often each ran
+(an instruction run once per listed pair, once per touching pair, ...: the pass's stages).
 """
 from __future__ import annotations
 
@@ -60,17 +75,43 @@ def run(n: int, steps: int, out: str) -> None:
     print(f"sphere_forces at {addr:#x}; {steps} steps of {n} spheres in {time.perf_counter() - t:.2f} s")
 
 
-def annotate(out: str, top: int) -> None:
+def callgrind_counts(path: str, addr: int, size: int) -> collections.Counter:
+    """Instructions executed per offset into the pass, from a callgrind file written with ``--dump-instr=yes``
+    (cost lines ``position line Ir``, positions absolute or relative to the last (``+n``, ``-n``, ``*``); the line
+    after ``calls=`` is a call's inclusive cost, not the calling instruction's own)."""
+    counts = collections.Counter()
+    pos = 0
+    after_call = False
+    for line in open(path):
+        if not line or line[0] not in "0123456789+-*":
+            after_call = line.startswith("calls=")
+            continue
+        f = line.split()
+        tok = f[0]
+        pos = pos if tok == "*" else pos + int(tok[1:], 0) if tok[0] == "+" else pos - int(tok[1:], 0) \
+            if tok[0] == "-" else int(tok, 0)
+        if after_call:
+            after_call = False
+            continue
+        if len(f) >= 3 and addr <= pos < addr + size:
+            counts[pos - addr] += int(f[-1])
+    return counts
+
+
+def annotate(out: str, top: int, callgrind: str | None = None) -> None:
     addr, size = Path(out + ".addr").read_text().split()
     addr, size = int(addr, 16), int(size)
-    counts = collections.Counter()
-    for line in open(out + ".ips"):
-        ip = int(line.split()[0], 16)
-        if addr <= ip < addr + size:
-            counts[ip - addr] += 1
+    if callgrind:
+        counts = callgrind_counts(callgrind, addr, size)
+    else:
+        counts = collections.Counter()
+        for line in open(out + ".ips"):
+            ip = int(line.split()[0], 16)
+            if addr <= ip < addr + size:
+                counts[ip - addr] += 1
     total = sum(counts.values())
     if not total:
-        sys.exit("no sample falls inside the pass: was <out>.ips recorded from the same run as <out>.addr?")
+        sys.exit("nothing counted falls inside the pass: was the profile recorded from the same run as <out>.addr?")
     dis = subprocess.run(["objdump", "-D", "-b", "binary", "-m", "i386:x86-64", f"--adjust-vma={addr:#x}",
                           out + ".bin"], capture_output=True, text=True, check=True).stdout
     rows = []
@@ -84,7 +125,16 @@ def annotate(out: str, top: int) -> None:
     stretch = collections.Counter()
     for off, c in counts.items():
         stretch[off // 256] += c
-    print(f"{total} samples in the pass")
+    if callgrind:
+        runs = collections.Counter()  # executions -> [instructions run that often, their total]
+        width = collections.Counter()
+        for off, c in counts.items():
+            runs[c] += c
+            width[c] += 1
+        print(f"{total} instructions executed in the pass; by how often an instruction ran:")
+        for c, ir in runs.most_common(12):
+            print(f"  {c:12d} times: {width[c]:4d} instructions, {100 * ir / total:5.1f} %")
+    print(f"{total} {'instructions' if callgrind else 'samples'} in the pass")
     print("share per 256 bytes: " + " ".join(f"{k * 256:x}:{100 * v / total:.1f}%" for k, v in sorted(stretch.items())
                                               if v > 0.005 * total))
     for _, r in sorted(rows, key=lambda x: -x[0])[:top]:
@@ -98,11 +148,12 @@ def main(argv=None) -> None:
     ap.add_argument("--steps", type=int, default=300, help="steps sampled (run)")
     ap.add_argument("--out", default="pass", help="prefix of the files written and read")
     ap.add_argument("--top", type=int, default=30, help="hottest instructions printed (annotate)")
+    ap.add_argument("--callgrind", help="annotate: a callgrind file (--dump-instr=yes) instead of <out>.ips")
     a = ap.parse_args(argv)
     if a.mode == "run":
         run(a.n, a.steps, a.out)
     else:
-        annotate(a.out, a.top)
+        annotate(a.out, a.top, a.callgrind)
 
 
 if __name__ == "__main__":
