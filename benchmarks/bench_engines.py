@@ -319,17 +319,18 @@ def equivalence(scene, S, engines, timeout):
 
 # ------------------------------------------------------------------ report
 
-def acceptance_lines(rows, vs_liggghts: float, vs_yade: float):
-    """Markdown lines: per size, demflow (one core) against LIGGGHTS and YADE, best round against best round,
-    each ratio judged against its target ('met' / 'NOT met')."""
+def acceptance_lines(rows, vs_liggghts: float, vs_yade: float, a: str = "demflow-1", label: str = ""):
+    """Markdown lines: per size, demflow (one core; engine ``a``) against LIGGGHTS and YADE, best round against best
+    round, each ratio judged against its target ('met' / 'NOT met'); ``label`` after the size (which demflow run)."""
     lines = []
     for row in rows:
         e = row["engines"]
-        if "demflow-1" in e and "liggghts" in e:
-            rl = e["demflow-1"]["rate_wall"] / e["liggghts"]["rate_wall"]
-            txt = f"- N = {row['n']:,}: vs LIGGGHTS {rl:.2f}× ({'met' if rl >= vs_liggghts else 'NOT met'})"
+        if a in e and "liggghts" in e:
+            rl = e[a]["rate_wall"] / e["liggghts"]["rate_wall"]
+            txt = (f"- N = {row['n']:,}{label}: vs LIGGGHTS {rl:.2f}× "
+                   f"({'met' if rl >= vs_liggghts else 'NOT met'})")
             if "yade" in e:
-                ry = e["demflow-1"]["rate_wall"] / e["yade"]["rate_wall"]
+                ry = e[a]["rate_wall"] / e["yade"]["rate_wall"]
                 txt += f", vs YADE {ry:.1f}× ({'met' if ry >= vs_yade else 'NOT met'})"
             lines.append(txt + ".")
     return lines

@@ -53,13 +53,17 @@ from demflow.engines.liggghts3d import Liggghts3DEngine, read_benchmark_output  
 from demflow.engines.yade3d import Yade3DEngine  # noqa: E402
 from demflow.jit import set_threads  # noqa: E402
 
-ENGINE_ORDER = ("demflow-1", "liggghts", "yade")
-ALL_ENGINES = ("demflow-1", "demflow-2", "liggghts", "yade")
+MATCHED = "demflow-1-matched"  # demflow, one thread, the scene in LIGGGHTS's conventions (liggghts_scene)
+ENGINE_ORDER = ("demflow-1", MATCHED, "liggghts", "yade")
+ALL_ENGINES = ("demflow-1", "demflow-2", MATCHED, "liggghts", "yade")
 
 
 def liggghts_scene(scene):
-    """The scene in LIGGGHTS's matching mode: the Mindlin spring on the total tangential displacement."""
-    return dataclasses.replace(scene, laws={k: dataclasses.replace(v, shear_spring="total")
+    """The scene in LIGGGHTS's conventions: the Mindlin spring on the total tangential displacement, and the
+    history projected onto the tangent plane after the increment without rescaling (``history_rotation='project'``,
+    LIGGGHTS 3.8.0's rule; demflow's default rescales it: capabilities feature 'history-rotation').  The LIGGGHTS
+    deck is this scene's; demflow runs it as engine ``demflow-1-matched`` (the same model as the LIGGGHTS run)."""
+    return dataclasses.replace(scene, laws={k: dataclasses.replace(v, shear_spring="total", history_rotation="project")
                                             for k, v in scene.laws.items()})
 
 
@@ -129,7 +133,8 @@ def bench_size(n, S, rounds, timeout, engines, liggghts_factor=1):
         before = load()
         for e in order:
             if e.startswith("demflow"):
-                wall, cpu, extra = time_demflow(scene, steps[e], int(e.split("-")[1]),
+                wall, cpu, extra = time_demflow(liggghts_scene(scene) if e == MATCHED else scene, steps[e],
+                                                int(e.split("-")[1]),
                                                 checkpoints=[k * steps[x] for x in engines for k in (1, 2)]
                                                 if rnd == 0 else ())
                 m = dict(round=rnd, dt_wall=wall, dt_cpu=cpu, **extra)
@@ -168,26 +173,33 @@ def markdown(rows, info):
              "Scene: benchmarks/packing3d.py `dense_fcc(N)` (FCC lattice, R = 1 mm ± 0.2 %, periodic x/y, floor, "
              "Hertz-Mindlin E = 70 GPa, ν = 0.3, μ = 0.5, e = 0.9, gravity). rate = N·S / (time of steps S..2S), "
              "best of the rounds (wall clock), spread = (best − worst)/best over the rounds, CPU-time rate in brackets. "
-             "demflow 1 thread, steps S..2S in process; LIGGGHTS one process (data file, primitive floor wall, "
+             "demflow 1 thread, steps S..2S in process, in its own conventions (the scene as written: shear spring "
+             "'incremental', history rescaled when the normal turns) and in LIGGGHTS's (`demflow-1-matched`: shear "
+             "spring 'total', history projected after the increment without rescaling — the model LIGGGHTS runs); "
+             "LIGGGHTS one process (data file, primitive floor wall, "
              "no output during the run, shear spring 'total' = its matching mode), " + liggghts_timing_text(rows)
              + "; YADE `-j1` (no PyRunner), t(2S) − t(S) of two processes.", "",
              "S is the step count of the shorter run (LIGGGHTS's S is given after its rate).", "",
-             "| N | S | demflow 1 thr | LIGGGHTS | YADE -j1 | demflow/LIGGGHTS | demflow/YADE |",
-             "|---|---|---|---|---|---|---|"]
+             "| N | S | demflow 1 thr | demflow 1 thr, LIGGGHTS's conventions | LIGGGHTS | YADE -j1 | demflow/LIGGGHTS "
+             "| demflow/LIGGGHTS, both in LIGGGHTS's conventions | demflow/YADE |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for row in rows:
         e = row["engines"]
         cell = lambda k: (f"{e[k]['rate_wall']:.3e} ±{e[k]['spread']:.0%} ({cpu_text(e[k]['rate_cpu'])})"  # noqa: E731
                           if k in e else "—")
         ratio = lambda a, b: (f"{e[a]['rate_wall'] / e[b]['rate_wall']:.2f}×" if a in e and b in e else "—")  # noqa: E731
         lig = f" S = {e['liggghts']['steps_S']}" if "liggghts" in e else ""
-        lines.append(f"| {row['n']:,} | {row['info']['steps_S']} | {cell('demflow-1')} | {cell('liggghts')}{lig} | "
-                     f"{cell('yade')} | {ratio('demflow-1', 'liggghts')} | {ratio('demflow-1', 'yade')} |")
+        lines.append(f"| {row['n']:,} | {row['info']['steps_S']} | {cell('demflow-1')} | {cell(MATCHED)} | "
+                     f"{cell('liggghts')}{lig} | {cell('yade')} | {ratio('demflow-1', 'liggghts')} | "
+                     f"{ratio(MATCHED, 'liggghts')} | {ratio('demflow-1', 'yade')} |")
     if any("demflow-2" in r["engines"] for r in rows):
         lines += ["", "demflow 2 threads: " + ", ".join(
             f"N = {r['n']:,}: {r['engines']['demflow-2']['rate_wall']:.3e}" for r in rows if "demflow-2" in r["engines"])]
     lines += ["", "Acceptance (issue 13, one core): demflow ≥ 1.5× LIGGGHTS and ≥ 10× YADE.", ""]
-    lines += acceptance_lines(rows, 1.5, 10.0)
+    lines += acceptance_lines(rows, 1.5, 10.0, label=" (demflow in its own conventions)")
+    lines += acceptance_lines(rows, 1.5, 10.0, a=MATCHED, label=" (demflow in LIGGGHTS's conventions, the same model)")
     lines += per_round_ratios(rows)
+    lines += per_round_ratios(rows, a=MATCHED)
     lines += ["", "## Rounds (wall-clock rate per engine; load average 1/5/15 min before and after each round)", "",
               "| N | round | order | " + " | ".join(ENGINE_ORDER) + " | load before | load after |",
               "|---|---|---|" + "---|" * len(ENGINE_ORDER) + "---|---|"]
@@ -202,24 +214,31 @@ def markdown(rows, info):
               "Touching sphere-sphere contacts per sphere (centres closer than r_i + r_j; demflow and YADE: at the "
               "last force pass, LIGGGHTS: at the positions after the last step) and kinetic energy (demflow and "
               "YADE: of v_{n-1/2}; LIGGGHTS: of its on-step v_n) after the run; demflow's from its round-0 "
-              "simulation continued (untimed) to the same step.", "",
+              "simulation continued (untimed) to the same step: for LIGGGHTS and `demflow-1-matched` demflow's run "
+              "in LIGGGHTS's conventions (when it ran), for the others demflow's own.", "",
               "| N | engine | steps | contacts/sphere | demflow's | rel. diff. | floor contacts | KE [J] | demflow's | "
               "rel. diff. |", "|---|---|---|---|---|---|---|---|---|---|"]
-    for row in rows:
-        e = row["engines"]
-        d0 = e.get("demflow-1") or e.get("demflow-2")
-        if d0 is None:
-            continue
+    def refs(d0):
         ref = {}
         for m in d0["rounds"]:
             for key in ("at_S", "at_2S"):
                 ref.setdefault(m[key]["steps"], m[key])
             for k, v in m.get("checkpoints", {}).items():
                 ref.setdefault(int(k), v)
+        return ref
+
+    for row in rows:
+        e = row["engines"]
+        d0 = e.get("demflow-1") or e.get("demflow-2")
+        if d0 is None:
+            continue
+        ref = refs(d0)
+        # LIGGGHTS against demflow in LIGGGHTS's conventions when that ran (the same model), else demflow's own
+        ref_lig = refs(e[MATCHED]) if MATCHED in e else ref
         for name, b in e.items():
             for key in ("at_S", "at_2S"):
                 sm = b[key]
-                r = ref.get(sm["steps"])
+                r = (ref_lig if name in ("liggghts", MATCHED) else ref).get(sm["steps"])
                 n = row["n"]
                 c = sm["sphere_contacts"] / n
                 cr = r["sphere_contacts"] / n if r else float("nan")

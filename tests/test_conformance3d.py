@@ -181,6 +181,43 @@ def test_history_rotation(engine, variant):
     assert ratio == pytest.approx(0.5, abs=tol("engines3d.first-order").value)
 
 
+def _projected(variant: str):
+    """The variant's scene with HertzMindlinLaw(history_rotation='project'): LIGGGHTS's rotation rule in demflow."""
+    sc = scene(variant, PARAMS)
+    return dataclasses.replace(sc, laws={k: dataclasses.replace(v, history_rotation="project") for k, v in sc.laws.items()})
+
+
+@pytest.mark.parametrize("variant", ["periodic-pair-total", "periodic-pair-total-dt2"])
+def test_history_rotation_project_is_liggghts_rule(variant):
+    """demflow's history_rotation='project' (increment, then project onto the tangent plane, no rescale) is
+    LIGGGHTS's rule: where the normal turns it equals the stored LIGGGHTS run and the reference model in
+    LIGGGHTS's conventions to round-off, where demflow's default rule differs by the named difference (the
+    negative control: the same comparison with the default fails the round-off tolerance)."""
+    run = stored(variant, "liggghts")
+    projected = demflow_trajectory(build(_projected(variant)))
+    assert _size(projected, run) <= ROUND_OFF
+    assert _size(projected, model(variant, rc.LIGGGHTS)) <= ROUND_OFF
+    assert _size(demflow_run(variant), run) > ROUND_OFF
+
+
+def test_history_rotation_project_changes_nothing_where_the_normal_keeps_its_direction():
+    """On a plane (the normal fixed) the two rules are one: 'project' equals the default to round-off."""
+    for v in ("oblique-plane-total", "moving-plate-total"):
+        assert _size(demflow_trajectory(build(_projected(v))), demflow_run(v)) <= ROUND_OFF, v
+
+
+def test_history_rotation_is_checked():
+    law = scene("periodic-pair", PARAMS).laws
+    sc = scene("periodic-pair", PARAMS)
+    bad = dataclasses.replace(sc, laws={k: dataclasses.replace(v, history_rotation="rotate") for k, v in law.items()})
+    with pytest.raises(SceneError, match=r"history_rotation='rotate' is not one of \('rescale', 'project'\)"):
+        build(bad)
+    md = dataclasses.replace(sc, laws={k: dataclasses.replace(v, tangential="mindlin-deresiewicz",
+                                                              history_rotation="project") for k, v in law.items()})
+    with pytest.raises(SceneError, match="give history_rotation='rescale'"):
+        build(md)
+
+
 def test_plane_velocity_timing_liggghts():
     """LIGGGHTS sees a normal velocity switch of a plane one step late: equal to demflow up to the switch,
     equal to the model with the 'behind' timing throughout, and the size measured after it."""

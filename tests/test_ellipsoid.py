@@ -226,8 +226,10 @@ def _limit_scenes(law, name):
 
 
 @pytest.mark.parametrize("law", [df.HertzMindlinLaw(friction=0.4, restitution=0.5),
+                                 df.HertzMindlinLaw(friction=0.4, restitution=0.5, shear_spring="total",
+                                                    history_rotation="project"),
                                  df.LinearLaw(kn=2e5, ks=1.5e5, cn=5.0, cs=3.0, friction=0.4)],
-                         ids=["hertz", "linear"])
+                         ids=["hertz", "hertz-liggghts-rotation", "linear"])
 def test_equal_axes_reproduce_spheres(law):
     """a = b = c (random orientations): the forces and moments of a jittered packing on a floor equal
     the sphere code's to round-off, and so do 300 steps of the motion."""

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from ..jit import njit, njit_inline
-from ..laws.base import law_energy3, law_force3
+from ..laws.base import law_energy3, law_force3, law_turns_history
 from ..shapes.ellipsoid import FACE, ellipsoid_pair, ellipsoid_plane, ellipsoid_triangle
 from .spheres import relative_velocity, rotate_history, triangle_image
 
@@ -209,7 +209,8 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
         viy = vel[i, 1] + (w[i, 2] * rix - w[i, 0] * riz)
         viz = vel[i, 2] + (w[i, 0] * riy - w[i, 1] * rix)
         vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
-        rotate_history(hist, k, nx, ny, nz)
+        if not law_turns_history(law):
+            rotate_history(hist, k, nx, ny, nz)
         ma = sp.mat[i]
         Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row = law_force3(law, hist, k, ma, mb, meff, re, overlap, vn, vtx,
                                                                      vty, vtz, nx, ny, nz, dt)

@@ -17,7 +17,9 @@ normal), δ = R_i + R_j - |d| (plane: R_i - distance), the contact point mid-ove
 (R - δ/2) as YADE's ScGeom.  The tangential history vector (columns 0-2) is rotated into the
 current tangent plane keeping its length (projection and rescale, before the law's increment; LIGGGHTS
 3.8.0 projects after the increment without rescaling, YADE 2023.02a rotates by T × (n_old × n): an
-O(θ²)-per-step difference, capabilities feature 'history-rotation'), then the law
+O(θ²)-per-step difference, capabilities feature 'history-rotation') — unless the law turns it itself
+(:func:`demflow.laws.base.law_turns_history`: HertzMindlinLaw(history_rotation='project'), LIGGGHTS's rule, the
+projection after the increment; the pass then skips the turn and its division and square root), then the law
 (:func:`demflow.laws.base.law_force3`) returns the normal force Fn and tangential force T on i:
 F_i = -Fn n + T, F_j = -F_i, moments (R_i - δ/2) n × T and (R_j - δ/2) n × T.
 """
@@ -28,7 +30,7 @@ import math
 import numpy as np
 
 from ..jit import njit, njit_inline
-from ..laws.base import law_energy3, law_force3
+from ..laws.base import law_energy3, law_force3, law_turns_history
 
 OK = 0
 BLOWUP_OVERLAP = 1
@@ -632,6 +634,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     diss = 0.0
     status = 0
     nw = planes.point.shape[0]
+    turns = law_turns_history(law)  # the law turns the history itself (after its increment)
     if tris.v.shape[0]:
         tcp, tact = triangle_contacts(P, pairs, n, nw, tris)
     else:
@@ -710,7 +713,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             qx[t] = nx
             qy[t] = ny
             qz[t] = nz
-            rotate_history(hist, k, nx, ny, nz)
+            if not turns:
+                rotate_history(hist, k, nx, ny, nz)
             mi = P[i, 10]
             mj = P[j, 10]
             if P[j, 12] != 0.0:
@@ -751,7 +755,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 rstar = ri
                 mb = np.uint64(planes.mat[w])
                 rmin = ri
-                rotate_history(hist, k, nx, ny, nz)
+                if not turns:
+                    rotate_history(hist, k, nx, ny, nz)
             elif j < n:
                 nx = qx[t]
                 ny = qy[t]
@@ -788,7 +793,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 rstar = ri
                 mb = np.uint64(planes.mat[p])
                 rmin = ri
-                rotate_history(hist, k, nx, ny, nz)
+                if not turns:
+                    rotate_history(hist, k, nx, ny, nz)
             if overlap > max_overlap_ratio * rmin:
                 status = BLOWUP_OVERLAP
             vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)

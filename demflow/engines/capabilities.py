@@ -432,14 +432,17 @@ FEATURES_3D: tuple[Feature, ...] = (
             measured=f"normal velocity 0 → 0.3 m/s during contact: {_M['plane-velocity-timing']:.3g} (LIGGGHTS, "
                      "oblique-plane-lift); in-plane switches: round-off (moving-plate-phases)"),
     Feature("history-rotation", "tangential history when the contact normal turns",
-            "projected onto the new tangent plane and rescaled to its length, before the increment",
+            "projected onto the new tangent plane and rescaled to its length, before the increment (default); "
+            "HertzMindlinLaw(history_rotation='project'): after the increment, projected without rescaling",
             yade=Expression("ScGeom::rotate: T −= T × (n_old × n), then the twist about n", DIFFERS,
                             "O(θ²) per step (θ the normal's turn per step): first order in Δt"),
             liggghts=Expression("shear += v_t Δt, then projected onto the tangent plane (no rescale)", DIFFERS,
-                                "O(θ²) per step: first order in Δt"),
+                                "O(θ²) per step with demflow's default: first order in Δt; demflow's "
+                                "history_rotation='project' is this rule (round-off on the periodic pair)"),
             measured=f"periodic pair (1.4e-3 rad turn over 52 steps): {_M['history-rotation/yade']:.2g} (YADE), "
                      f"{_M['history-rotation/liggghts']:.2g} (LIGGGHTS), halved at Δt/2; each engine's own rule "
-                     "reproduces it to round-off"),
+                     "reproduces it to round-off, and demflow with history_rotation='project' reproduces LIGGGHTS's "
+                     "run to round-off"),
     Feature("avoid-ratcheting", "velocity at the contact point (sphere pairs)", "lever arms R − δ/2",
             yade=Expression("Ig2_Sphere_Sphere_ScGeom(avoidGranularRatcheting=False) in the deck; YADE's default "
                             "True changes the relative velocity", EXACT, "with the deck's setting"),

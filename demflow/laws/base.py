@@ -116,8 +116,16 @@ class LawFamily:
 # A 3D contact's history row starts with its tangential vector (columns 0-2: a force or a
 # displacement, the law says which); the sphere pair pass rotates that vector into the current
 # tangent plane before it calls the law (keeping its length), so a law sees history in the plane
-# of the contact.  Further columns are the law's own (scalars; a law that keeps vectors there
-# projects them itself).
+# of the contact — unless the law turns it itself (:func:`law_turns_history`).  Further columns are
+# the law's own (scalars; a law that keeps vectors there projects them itself).
+
+def law_turns_history(law):
+    """True when the law carries its tangential history into the current tangent plane itself (the Hertz-Mindlin
+    law's ``history_rotation='project'``: after its increment, LIGGGHTS's rule); then the pair pass does not turn it
+    before the call.  A scalar read per contact (a branch the processor predicts: the value is scene-wide).
+    Compiled per law (overload)."""
+    raise NotImplementedError(f"no compiled 3D law for parameters of type {type(law).__name__}")
+
 
 def law_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
     """Advance 3D contact k by one step; returns (Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row): the

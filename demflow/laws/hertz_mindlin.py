@@ -39,7 +39,7 @@ import numpy as np
 from numba.extending import overload
 
 from ..jit import njit, njit_inline
-from .base import LawFamily, is_params_of, law_energy3, law_force3
+from .base import LawFamily, is_params_of, law_energy3, law_force3, law_turns_history
 from .restitution import CONVENTIONS, zeta_for
 
 TANGENTIAL_NONE = 0
@@ -49,10 +49,13 @@ SHEAR_INCREMENTAL = 0  # YADE: T += -k_t v_t Δt
 SHEAR_TOTAL = 1  # LIGGGHTS: u += v_t Δt, T = -k_t u
 CAP_TOTAL = 0
 CAP_ELASTIC = 1
+ROTATION_RESCALE = 0  # demflow: the pair pass projects the history onto the new tangent plane and rescales it, then the law
+ROTATION_PROJECT = 1  # LIGGGHTS: the law increments the history, then projects it onto the tangent plane (no rescale)
 
 _TANGENTIAL = {"none": TANGENTIAL_NONE, "mindlin": TANGENTIAL_MINDLIN, "mindlin-deresiewicz": TANGENTIAL_MD}
 _SHEAR = {"incremental": SHEAR_INCREMENTAL, "total": SHEAR_TOTAL}
 _CAP = {"total": CAP_TOTAL, "elastic": CAP_ELASTIC}
+_ROTATION = {"rescale": ROTATION_RESCALE, "project": ROTATION_PROJECT}
 
 
 @dataclass(frozen=True)
@@ -68,6 +71,11 @@ class HertzMindlinLaw:
     tangential : "mindlin" (k_t = 8G*a), "mindlin-deresiewicz" (ch3 3.24-3.25) or "none"
     shear_spring : "incremental" (YADE) or "total" (LIGGGHTS) storage of the Mindlin spring
     friction_cap : Coulomb against the "total" normal force (engines) or its "elastic" part
+    history_rotation : how the tangential history follows a turning contact normal: "rescale" (before the
+              increment, projected onto the new tangent plane and rescaled to its length: its magnitude is kept)
+              or "project" (after the increment, projected onto the tangent plane without rescaling: LIGGGHTS
+              3.8.0's rule, its matching mode; the two differ by O(θ²) per step, θ the normal's turn in a step:
+              capabilities feature 'history-rotation')
     """
 
     friction: float = 0.0
@@ -77,6 +85,7 @@ class HertzMindlinLaw:
     tangential: str = "mindlin"
     shear_spring: str = "incremental"
     friction_cap: str = "total"
+    history_rotation: str = "rescale"
 
     def check(self, pair) -> None:
         from ..scene import SceneError
@@ -95,13 +104,17 @@ class HertzMindlinLaw:
                 raise SceneError(f"scene.laws[{pair!r}].{key}={v} is outside (0, 1]; a Hertz dashpot reaches "
                                  "any e > 0: give 0 < e <= 1")
         for key, allowed in (("damping", CONVENTIONS[:3]), ("tangential", tuple(_TANGENTIAL)),
-                             ("shear_spring", tuple(_SHEAR)), ("friction_cap", tuple(_CAP))):
+                             ("shear_spring", tuple(_SHEAR)), ("friction_cap", tuple(_CAP)),
+                             ("history_rotation", tuple(_ROTATION))):
             v = getattr(self, key)
             if v not in allowed:
                 raise SceneError(f"scene.laws[{pair!r}].{key}={v!r} is not one of {allowed}")
         if self.tangential == "mindlin-deresiewicz" and self.shear_spring != "incremental":
             raise SceneError(f"scene.laws[{pair!r}].tangential='mindlin-deresiewicz' is incremental by nature; "
                              "give shear_spring='incremental'")
+        if self.tangential == "mindlin-deresiewicz" and self.history_rotation != "rescale":
+            raise SceneError(f"scene.laws[{pair!r}].tangential='mindlin-deresiewicz' keeps its direction of loading "
+                             "in the tangent plane the pair pass turns it into: give history_rotation='rescale'")
 
 
 # ------------------------------------------------------------------------------ pure functions
@@ -190,6 +203,7 @@ HertzParams = namedtuple("HertzParams", [
     "tangential",      # (nm, nm) int64 TANGENTIAL_*
     "shear_spring",    # SHEAR_* (scene-wide)
     "cap",             # CAP_* (scene-wide)
+    "rotation",        # ROTATION_* (scene-wide)
 ])
 """Parameters of the Hertz-Mindlin law as the compiled cycle sees them (see :mod:`demflow.laws.base`), for a
 scene none of whose material pairs uses Mindlin-Deresiewicz: its pair pass is compiled without that branch."""
@@ -208,13 +222,14 @@ HISTORY_WIDTH_3D = 8  # T (or u) vector, MD direction e (3), T_rev, MD state (di
 
 
 @njit_inline
-def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz,
-                   dt, with_md):
+def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, rotation, row, meff, rstar, overlap, vn, vtx, vty, vtz,
+                   nx, ny, nz, dt, with_md):
     """The Hertz-Mindlin force of one 3D contact from the pair's scalar parameters and the contact's history
     (law_force3's contract); returns (Fn, Tx, Ty, Tz, sliding, dissipated) and the history after the step.
 
     E*, G* the effective moduli, mu the Coulomb coefficient, zn/zt the damping ratios, mode TANGENTIAL_*,
-    shear_spring SHEAR_*, cap CAP_*.  ``with_md``: a compile-time constant, False where no contact can be
+    shear_spring SHEAR_*, cap CAP_*, rotation ROTATION_* (ROTATION_PROJECT: the pair pass has not turned the history;
+    the spring's state after the increment is projected onto the tangent plane here, LIGGGHTS's rule).  ``with_md``: a compile-time constant, False where no contact can be
     Mindlin-Deresiewicz (:data:`HertzParamsMD`): the branch is then not compiled, and a ``mode`` of
     TANGENTIAL_MD would be taken as TANGENTIAL_MINDLIN (the parameters' type rules that out).  ``row``: the contact's history (:data:`HISTORY_WIDTH_3D` values): the
     tangential vector (h0, h1, h2); for Mindlin-Deresiewicz the direction e (e0, e1, e2), T_rev and the
@@ -247,6 +262,11 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, 
                 h0 += vtx * dt
                 h1 += vty * dt
                 h2 += vtz * dt
+                if rotation == ROTATION_PROJECT:
+                    hn = h0 * nx + h1 * ny + h2 * nz
+                    h0 -= hn * nx
+                    h1 -= hn * ny
+                    h2 -= hn * nz
                 Tx = -kt * h0
                 Ty = -kt * h1
                 Tz = -kt * h2
@@ -254,6 +274,11 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, 
                 Tx = h0 - kt * vtx * dt
                 Ty = h1 - kt * vty * dt
                 Tz = h2 - kt * vtz * dt
+                if rotation == ROTATION_PROJECT:
+                    Tn = Tx * nx + Ty * ny + Tz * nz
+                    Tx -= Tn * nx
+                    Ty -= Tn * ny
+                    Tz -= Tn * nz
         elif with_md:
             # Mindlin-Deresiewicz along the contact's first direction of motion e
             e_dot_n = e0 * nx + e1 * ny + e2 * nz
@@ -322,6 +347,16 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, row, meff, rstar, 
     return Fn, Tx, Ty, Tz, sliding, diss, (h0, h1, h2, e0, e1, e2, T_rev, state)
 
 
+@overload(law_turns_history, inline="always")
+def _hertz_turns_history(law):
+    if not (is_params_of(law, HertzParams) or is_params_of(law, HertzParamsMD)):
+        return None
+
+    def impl(law):
+        return law.rotation == ROTATION_PROJECT
+    return impl
+
+
 @overload(law_force3, inline="always")
 def _hertz_force3(law, hist, k, ma, mb, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt):
     if is_params_of(law, HertzParams):
@@ -343,7 +378,7 @@ def _hertz_force3_impl(with_md: bool):
                hist[k, min(5, last)], hist[k, min(6, last)], hist[k, min(7, last)])
         Fn, Tx, Ty, Tz, sliding, diss, row = hertz_contact3(
             law.Estar[ma, mb], law.Gstar[ma, mb], law.mu[ma, mb], law.zn[ma, mb], law.zt[ma, mb], mode,
-            law.shear_spring, law.cap, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt, with_md)
+            law.shear_spring, law.cap, law.rotation, row, meff, rstar, overlap, vn, vtx, vty, vtz, nx, ny, nz, dt, with_md)
         n_row = HISTORY_WIDTH_3D if with_md and mode == TANGENTIAL_MD else 3
         return Fn, Tx, Ty, Tz, sliding, diss, row, n_row
     return impl
@@ -447,7 +482,8 @@ class HertzMindlin(LawFamily):
         t = self.tables()
         cls = HertzParamsMD if bool(np.any(t["tangential"] == TANGENTIAL_MD)) else HertzParams
         return cls(**t, shear_spring=self._scene_wide("shear_spring", _SHEAR),
-                   cap=self._scene_wide("friction_cap", _CAP))
+                   cap=self._scene_wide("friction_cap", _CAP),
+                   rotation=self._scene_wide("history_rotation", _ROTATION))
 
     def stiffness_bound(self, law) -> float:
         raise NotImplementedError("Hertz stiffness grows with overlap: use stiffness_at(overlap)")

@@ -17,7 +17,7 @@ from numba.extending import overload
 
 from ..jit import njit, njit_inline
 from .base import (LawFamily, is_params_of, law_energy3, law_energy_add, law_force, law_force3, law_force_dissipation,
-                   law_separate)
+                   law_separate, law_turns_history)
 
 NORMAL_INCREMENTAL = 0  # N += kN ṅ Δt (thesis eqs 2.11, 2.13, 2.15)
 NORMAL_OVERLAP = 1  # N = kN δ (YADE / LIGGGHTS)
@@ -169,6 +169,17 @@ def _linear_energy(law, e, hist, k, ma, mb):
         if law.has_shear and law.ks[ma, mb] > 0.0:
             e += 0.5 * hist[k, 1] ** 2 / law.ks[ma, mb]
         return e
+    return impl
+
+
+@overload(law_turns_history, inline="always")
+def _linear_turns_history(law):
+    """The pair pass turns the linear law's shear spring (projected and rescaled)."""
+    if not is_params_of(law, LinearParams):
+        return None
+
+    def impl(law):
+        return False
     return impl
 
 
