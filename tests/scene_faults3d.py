@@ -155,7 +155,7 @@ def _(pick):
 
 @fault3d("3d laws", "Hertz-Mindlin choice")
 def _(pick):
-    key = pick(["damping", "tangential", "shear_spring", "friction_cap"])
+    key = pick(["damping", "tangential", "shear_spring", "friction_cap", "history_rotation"])
     v = pick(["nope", None, 1, "YADE"])
     sc = base3d()
     sc.laws = dict(sc.laws) | {("g", "g"): _set(sc.laws[("g", "g")], **{key: v})}
