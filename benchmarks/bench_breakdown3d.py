@@ -103,12 +103,17 @@ def main(argv=None):
     ap.add_argument("--reps", type=int, nargs="+", default=[20, 5], help="pair-pass repetitions per size")
     ap.add_argument("--tag", default="breakdown3d")
     ap.add_argument("--notes", default="")
+    ap.add_argument("--conventions", choices=("own", "liggghts"), default="own",
+                    help="demflow's scene: as written ('own': incremental spring, rescaled history) or in the LIGGGHTS "
+                         "deck's conventions ('liggghts': bench_engines3d.liggghts_scene, the model LIGGGHTS runs)")
     a = ap.parse_args(argv)
     numba.set_num_threads(1)
     t0 = time.perf_counter()
     rows = {}
     for n, S, reps in zip(a.sizes, a.steps, a.reps):
         scene = dense_fcc(n, name=f"breakdown3d{n}")
+        if a.conventions == "liggghts":
+            scene = liggghts_scene(scene)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             build(scene).run(20)  # compile and warm
@@ -140,6 +145,8 @@ def main(argv=None):
     write_text_atomic(out / f"{a.tag}.json", json.dumps(dict(meta=meta, rows=rows), indent=1))
     lines = [f"# Where the 3D benchmark step goes: demflow and LIGGGHTS, one thread ({meta['date']})", "",
              f"Command: `{meta['command']}`. Notes: {a.notes or '—'}", "",
+             f"demflow's conventions: {a.conventions} ('own': the scene as written; 'liggghts': the LIGGGHTS deck's, "
+             "total shear spring and history projected without rescaling).", "",
              f"Per step, best of {a.rounds} rounds (spread = (worst - best)/best). demflow's parts are timed on a "
              "fixed state (module docstring); LIGGGHTS's are its own breakdown of the timed run.", ""]
     for n, r in rows.items():
