@@ -545,3 +545,45 @@ def test_hertz_parameter_type_compiles_mindlin_deresiewicz_only_where_a_pair_use
     mixed = df.build(dataclasses.replace(scene, laws={**scene.laws, ("grain", "steel"): md}))
     assert type(mixed.law_params) is HertzParamsMD
     assert mixed.pairs.hist.shape[1] == 8
+
+
+# ---------------------------------------------------------------------------- history rotation modes
+@pytest.mark.parametrize("spring", ["incremental", "total"])
+def test_history_rotation_project_projects_after_the_increment(spring):
+    """history_rotation='project' (LIGGGHTS's rule): the law increments the spring, then drops its component along
+    n, without rescaling; 'rescale' leaves the row to the pass (the law adds only the increment).  Checked on the
+    law's compiled body against the rule written out here."""
+    from demflow.laws.hertz_mindlin import (ROTATION_PROJECT, ROTATION_RESCALE, SHEAR_INCREMENTAL, SHEAR_TOTAL,
+                                            TANGENTIAL_MINDLIN, CAP_TOTAL, hertz_contact3)
+
+    E, G, mu, zn, zt = 7e10, 2.7e10, 10.0, 0.0, 0.0  # no dashpots, a cap far away: the spring alone
+    n = np.array([0.6, 0.0, 0.8])
+    h = np.array([2e-7, 1e-7, 1e-7]) if spring == "total" else np.array([3.0, 1.0, 1.0])  # n·h != 0
+    vt = np.array([0.8, 0.3, -0.6]) * 1e-3  # tangential (vt·n = 0)
+    dt, rstar, overlap, meff = 1e-6, 1e-3, 1e-6, 1e-3
+    mode = SHEAR_TOTAL if spring == "total" else SHEAR_INCREMENTAL
+    row = (h[0], h[1], h[2], 0.0, 0.0, 0.0, 0.0, 0.0)
+    kt = 8.0 * G * math.sqrt(rstar * overlap)
+    out = {}
+    for rot in (ROTATION_RESCALE, ROTATION_PROJECT):
+        Fn, Tx, Ty, Tz, sliding, diss, new = hertz_contact3(E, G, mu, zn, zt, TANGENTIAL_MINDLIN, mode, CAP_TOTAL, rot,
+                                                           row, meff, rstar, overlap, 0.0, vt[0], vt[1], vt[2],
+                                                           n[0], n[1], n[2], dt, False)
+        assert not sliding
+        out[rot] = (np.array([Tx, Ty, Tz]), np.array(new[:3]))
+    if spring == "total":
+        u = h + vt * dt
+        want_rescale = -kt * u
+        u_p = u - (u @ n) * n
+        want_project = -kt * u_p
+        np.testing.assert_allclose(out[ROTATION_PROJECT][1], u_p, rtol=1e-14, atol=1e-14 * np.abs(u).max())
+    else:
+        T = h - kt * vt * dt
+        want_rescale = T
+        want_project = T - (T @ n) * n
+        np.testing.assert_allclose(out[ROTATION_PROJECT][1], want_project, rtol=1e-14, atol=1e-14 * np.abs(T).max())
+    scale = np.abs(want_rescale).max()
+    np.testing.assert_allclose(out[ROTATION_RESCALE][0], want_rescale, rtol=0, atol=1e-13 * scale)
+    np.testing.assert_allclose(out[ROTATION_PROJECT][0], want_project, rtol=0, atol=1e-13 * scale)
+    assert abs(out[ROTATION_PROJECT][0] @ n) < 1e-13 * scale  # in the tangent plane
+    assert abs(out[ROTATION_RESCALE][0] @ n) > 0.1 * scale  # the law alone does not project (the pass turns it)
