@@ -16,7 +16,9 @@ Helpers called per pair receive scalars or are inlined, because every array hand
 call costs reference-count updates, which are atomic and serialise threads.  Rows are indexed with unsigned
 integers (``np.uint64``): for a signed index Numba adds the arithmetic that makes a negative one count from the
 end, which LLVM cannot drop when the index is loaded from the pair list (with the sums' indices, 5 % of the 2D
-step at 1e4 discs: benchmarks/results/speed2d_session34_ab.md).
+step at 1e4 discs: benchmarks/results/speed2d_session34_ab.md).  The material indices that read the law's tables are
+unsigned too, as in the 3D pass (the same bits; the step's time within the A/B's noise:
+benchmarks/results/speed_experiments_session40.md).
 """
 from __future__ import annotations
 
@@ -64,7 +66,7 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
         xi = P[i, 0]
         yi = P[i, 1]
         ri = P[i, 5]
-        ma = int(P[i, 6])
+        ma = np.uint64(np.int64(P[i, 6]))  # unsigned: the law's tables read without a wrap-around test
         if j < n:
             rj = P[ju, 5]
             xj, yj = other_centre(box, sx, sy, k, P[ju, 0], P[ju, 1])
@@ -93,7 +95,7 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
             spin = P[i, 4] * ri + P[ju, 4] * rj
             px = xi + (ri - 0.5 * overlap) * ex
             py = yi + (ri - 0.5 * overlap) * ey
-            mb = int(P[ju, 6])
+            mb = np.uint64(np.int64(P[ju, 6]))
             rmin = min(ri, rj)
         else:
             w = j - n
@@ -116,7 +118,7 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
             spin = P[i, 4] * ri
             px = xi + 0.5 * (ri + D) * ex
             py = yi + 0.5 * (ri + D) * ey
-            mb = walls.mat[w]
+            mb = np.uint64(walls.mat[w])
             rmin = ri
         tx = ey
         ty = -ex
