@@ -8,9 +8,11 @@ about 3 touching contacts per sphere from the start (a dense, stressed, nearly s
 The timing protocol is bench_engines.py's (its ``ExternalRunner`` is used): each engine's time of
 steps S..2S of the scene, recording nothing:
     rate = N x S / (time of steps S..2S)      [sphere-steps per second]
-demflow: one thread, steps S..2S of one simulation timed in process (JIT warm).  LIGGGHTS: one
+demflow: one thread, steps S..2S of one simulation timed in process (JIT warm); engine ``demflow-1`` runs the scene
+as written (demflow's own conventions), ``demflow-1-matched`` the LIGGGHTS deck's scene (the model LIGGGHTS runs).  LIGGGHTS: one
 process, no MPI, the benchmark deck (``Liggghts3DEngine(benchmark=True)``: atoms from a data file,
-the floor a primitive wall, no dumps; the scene in LIGGGHTS's matching shear-spring mode 'total'),
+the floor a primitive wall, no dumps; the scene in LIGGGHTS's conventions, :func:`liggghts_scene`: shear spring
+'total', history projected without rescaling),
 its ``run 2S`` run as ``run S`` and ``run S pre no`` (the single run's trajectory) and the second run's
 "Loop time" taken (in process, as demflow's).
 YADE ``-j1``, the benchmark deck (``Yade3DEngine(benchmark=True)``: no PyRunner during the steps),
@@ -229,7 +231,7 @@ def markdown(rows, info):
 
     for row in rows:
         e = row["engines"]
-        d0 = e.get("demflow-1") or e.get("demflow-2")
+        d0 = e.get("demflow-1") or e.get("demflow-2") or e.get(MATCHED)
         if d0 is None:
             continue
         ref = refs(d0)

@@ -111,6 +111,7 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
     iters = 0
     diss = 0.0
     nw = planes.point.shape[0]
+    turns = law_turns_history(law)  # the law turns the history itself (after its increment)
     mt = 0
     for k in range(pairs.i.shape[0]):
         if pairs.j[k] >= n + nw:
@@ -209,7 +210,7 @@ def ellipsoid_forces(sp, ell, pairs, planes, tris, law, dt, recording, max_overl
         viy = vel[i, 1] + (w[i, 2] * rix - w[i, 0] * riz)
         viz = vel[i, 2] + (w[i, 0] * riy - w[i, 1] * rix)
         vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
-        if not law_turns_history(law):
+        if not turns:
             rotate_history(hist, k, nx, ny, nz)
         ma = sp.mat[i]
         Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row = law_force3(law, hist, k, ma, mb, meff, re, overlap, vn, vtx,

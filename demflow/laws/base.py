@@ -122,7 +122,7 @@ class LawFamily:
 def law_turns_history(law):
     """True when the law carries its tangential history into the current tangent plane itself (the Hertz-Mindlin
     law's ``history_rotation='project'``: after its increment, LIGGGHTS's rule); then the pair pass does not turn it
-    before the call.  A scalar read per contact (a branch the processor predicts: the value is scene-wide).
+    before the call.  Read once per pass (the value is scene-wide).
     Compiled per law (overload)."""
     raise NotImplementedError(f"no compiled 3D law for parameters of type {type(law).__name__}")
 

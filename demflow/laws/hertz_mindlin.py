@@ -222,6 +222,13 @@ HISTORY_WIDTH_3D = 8  # T (or u) vector, MD direction e (3), T_rev, MD state (di
 
 
 @njit_inline
+def _in_plane(x, y, z, nx, ny, nz):
+    """The vector (x, y, z) less its component along the unit normal n (history_rotation='project')."""
+    c = x * nx + y * ny + z * nz
+    return x - c * nx, y - c * ny, z - c * nz
+
+
+@njit_inline
 def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, rotation, row, meff, rstar, overlap, vn, vtx, vty, vtz,
                    nx, ny, nz, dt, with_md):
     """The Hertz-Mindlin force of one 3D contact from the pair's scalar parameters and the contact's history
@@ -229,10 +236,10 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, rotation, row, mef
 
     E*, G* the effective moduli, mu the Coulomb coefficient, zn/zt the damping ratios, mode TANGENTIAL_*,
     shear_spring SHEAR_*, cap CAP_*, rotation ROTATION_* (ROTATION_PROJECT: the pair pass has not turned the history;
-    the spring's state after the increment is projected onto the tangent plane here, LIGGGHTS's rule).  ``with_md``: a compile-time constant, False where no contact can be
-    Mindlin-Deresiewicz (:data:`HertzParamsMD`): the branch is then not compiled, and a ``mode`` of
-    TANGENTIAL_MD would be taken as TANGENTIAL_MINDLIN (the parameters' type rules that out).  ``row``: the contact's history (:data:`HISTORY_WIDTH_3D` values): the
-    tangential vector (h0, h1, h2); for Mindlin-Deresiewicz the direction e (e0, e1, e2), T_rev and the
+    the spring's state after the increment is projected onto the tangent plane here, LIGGGHTS's rule).  ``with_md``:
+    a compile-time constant, False where no contact can be Mindlin-Deresiewicz (:data:`HertzParamsMD`): the branch is
+    then not compiled, and a ``mode`` of TANGENTIAL_MD would be taken as TANGENTIAL_MINDLIN (the parameters' type rules
+    that out).  ``row``: the contact's history (:data:`HISTORY_WIDTH_3D` values): the tangential vector (h0, h1, h2); for Mindlin-Deresiewicz the direction e (e0, e1, e2), T_rev and the
     state (passed through unused otherwise).
 
     Scalars in and out, and one return: law_force3's implementation reads the tables and the history row,
@@ -263,10 +270,7 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, rotation, row, mef
                 h1 += vty * dt
                 h2 += vtz * dt
                 if rotation == ROTATION_PROJECT:
-                    hn = h0 * nx + h1 * ny + h2 * nz
-                    h0 -= hn * nx
-                    h1 -= hn * ny
-                    h2 -= hn * nz
+                    h0, h1, h2 = _in_plane(h0, h1, h2, nx, ny, nz)
                 Tx = -kt * h0
                 Ty = -kt * h1
                 Tz = -kt * h2
@@ -275,10 +279,7 @@ def hertz_contact3(E, G, mu, zn, zt, mode, shear_spring, cap, rotation, row, mef
                 Ty = h1 - kt * vty * dt
                 Tz = h2 - kt * vtz * dt
                 if rotation == ROTATION_PROJECT:
-                    Tn = Tx * nx + Ty * ny + Tz * nz
-                    Tx -= Tn * nx
-                    Ty -= Tn * ny
-                    Tz -= Tn * nz
+                    Tx, Ty, Tz = _in_plane(Tx, Ty, Tz, nx, ny, nz)
         elif with_md:
             # Mindlin-Deresiewicz along the contact's first direction of motion e
             e_dot_n = e0 * nx + e1 * ny + e2 * nz
