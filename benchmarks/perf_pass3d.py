@@ -4,8 +4,8 @@
     perf script -i pass.data -F ip > pass.ips
     python benchmarks/perf_pass3d.py annotate --out pass [--top 30]
 
-``run``: builds packing3d.py's benchmark packing (``dense_fcc(n)``, one thread), runs 200 untimed steps (compilation,
-first rebuild), writes the compiled pass's machine code as it lies in memory (``<out>.bin``, read up to the end of
+``run``: builds packing3d.py's benchmark packing (``dense_fcc(n)``, one thread; ``--conventions liggghts``: in the
+LIGGGHTS deck's conventions), runs ``--warm`` untimed steps (default 200: compilation, first rebuild), writes the compiled pass's machine code as it lies in memory (``<out>.bin``, read up to the end of
 its memory mapping, at most 128 KiB) and its address (``<out>.addr``: Numba's ``get_pointer_to_function``), then runs
 ``--steps`` steps.  ``annotate``: disassembles ``<out>.bin`` at that address (``objdump``), counts the samples of
 ``<out>.ips`` (one instruction pointer a line, from ``perf script -F ip``) per instruction, and writes
@@ -48,7 +48,8 @@ sys.path.insert(0, str(HERE / "benchmarks"))
 LIMIT = 1 << 17
 
 
-def run(n: int, steps: int, out: str) -> None:
+def run(n: int, steps: int, out: str, warm: int = 200, conventions: str = "own") -> None:
+    from bench_engines3d import liggghts_scene
     from packing3d import dense_fcc
 
     from demflow import build
@@ -56,8 +57,9 @@ def run(n: int, steps: int, out: str) -> None:
     from demflow.jit import set_threads
 
     set_threads(1)
-    sim = build(dense_fcc(n))
-    sim.run(200)
+    scene = dense_fcc(n)
+    sim = build(liggghts_scene(scene) if conventions == "liggghts" else scene)
+    sim.run(warm)
     compiled = list(spheres.sphere_forces.overloads.values())
     if len(compiled) != 1:
         sys.exit(f"sphere_forces has {len(compiled)} compiled versions in this process; this tool reads one")
@@ -146,12 +148,15 @@ def main(argv=None) -> None:
     ap.add_argument("mode", choices=("run", "annotate"))
     ap.add_argument("--n", type=int, default=100000, help="spheres (run)")
     ap.add_argument("--steps", type=int, default=300, help="steps sampled (run)")
+    ap.add_argument("--warm", type=int, default=200, help="untimed steps before (run; bench_engines3d.py's S: 3000 at 1e4)")
+    ap.add_argument("--conventions", choices=("own", "liggghts"), default="own",
+                    help="run: the scene as written, or in the LIGGGHTS deck's conventions (bench_engines3d.liggghts_scene)")
     ap.add_argument("--out", default="pass", help="prefix of the files written and read")
     ap.add_argument("--top", type=int, default=30, help="hottest instructions printed (annotate)")
     ap.add_argument("--callgrind", help="annotate: a callgrind file (--dump-instr=yes) instead of <out>.ips")
     a = ap.parse_args(argv)
     if a.mode == "run":
-        run(a.n, a.steps, a.out)
+        run(a.n, a.steps, a.out, a.warm, a.conventions)
     else:
         annotate(a.out, a.top, a.callgrind)
 
