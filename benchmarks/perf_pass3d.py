@@ -5,8 +5,8 @@
     python benchmarks/perf_pass3d.py annotate --out pass [--top 30]
 
 ``run``: builds packing3d.py's benchmark packing (``dense_fcc(n)``, one thread; ``--conventions liggghts``: in the
-LIGGGHTS deck's conventions), runs ``--warm`` untimed steps (default 200: compilation, first rebuild), writes the compiled pass's machine code as it lies in memory (``<out>.bin``, read up to the end of
-its memory mapping, at most 128 KiB) and its address (``<out>.addr``: Numba's ``get_pointer_to_function``), then runs
+LIGGGHTS deck's conventions), runs ``--warm`` untimed steps (default 200: compilation, first rebuild), writes the
+compiled pass's machine code as it lies in memory (``<out>.bin``, read up to the end of its memory mapping, at most 128 KiB) and its address (``<out>.addr``: Numba's ``get_pointer_to_function``), then runs
 ``--steps`` steps.  ``annotate``: disassembles ``<out>.bin`` at that address (``objdump``), counts the samples of
 ``<out>.ips`` (one instruction pointer a line, from ``perf script -F ip``) per instruction, and writes
 ``<out>.annot`` (samples, share of the pass's samples, offset, instruction) and prints the share per 256-byte
@@ -148,9 +148,11 @@ def main(argv=None) -> None:
     ap.add_argument("mode", choices=("run", "annotate"))
     ap.add_argument("--n", type=int, default=100000, help="spheres (run)")
     ap.add_argument("--steps", type=int, default=300, help="steps sampled (run)")
-    ap.add_argument("--warm", type=int, default=200, help="untimed steps before (run; bench_engines3d.py's S: 3000 at 1e4)")
+    ap.add_argument("--warm", type=int, default=200,
+                    help="untimed steps before (run; bench_engines3d.py's S: 3000 at 1e4)")
     ap.add_argument("--conventions", choices=("own", "liggghts"), default="own",
-                    help="run: the scene as written, or in the LIGGGHTS deck's conventions (bench_engines3d.liggghts_scene)")
+                    help="run: the scene as written, or in the LIGGGHTS deck's conventions "
+                         "(bench_engines3d.liggghts_scene)")
     ap.add_argument("--out", default="pass", help="prefix of the files written and read")
     ap.add_argument("--top", type=int, default=30, help="hottest instructions printed (annotate)")
     ap.add_argument("--callgrind", help="annotate: a callgrind file (--dump-instr=yes) instead of <out>.ips")
