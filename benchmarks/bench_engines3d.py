@@ -266,8 +266,8 @@ def main(argv=None):
     p.add_argument("--engines", nargs="+", default=list(ENGINE_ORDER), choices=ALL_ENGINES)
     p.add_argument("--timeout", type=float, default=900.0, help="per engine subprocess [s]")
     p.add_argument("--yade-max", type=int, default=None,
-                   help="run YADE only at sizes up to this N (at 1e5 spheres and S = 400 its S-step runs took 388-432 s "
-                        "and its 2S-step runs 620-665 s: 2026-12-02, an Intel Xeon host)")
+                   help="run YADE only at sizes up to this N (at 1e5 spheres and S = 400 its S-step runs took "
+                        "388-432 s and its 2S-step runs 620-665 s: 2026-12-02, an Intel Xeon host)")
     p.add_argument("--notes", default="", help="free text for the report (e.g. the machine's load)")
     p.add_argument("--out", default=str(Path(__file__).resolve().parent / "results"))
     p.add_argument("--tag", default="engines3d_speed")

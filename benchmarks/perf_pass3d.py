@@ -6,7 +6,8 @@
 
 ``run``: builds packing3d.py's benchmark packing (``dense_fcc(n)``, one thread; ``--conventions liggghts``: in the
 LIGGGHTS deck's conventions), runs ``--warm`` untimed steps (default 200: compilation, first rebuild), writes the
-compiled pass's machine code as it lies in memory (``<out>.bin``, read up to the end of its memory mapping, at most 128 KiB) and its address (``<out>.addr``: Numba's ``get_pointer_to_function``), then runs
+compiled pass's machine code as it lies in memory (``<out>.bin``, read up to the end of its memory mapping, at most
+128 KiB) and its address (``<out>.addr``: Numba's ``get_pointer_to_function``), then runs
 ``--steps`` steps.  ``annotate``: disassembles ``<out>.bin`` at that address (``objdump``), counts the samples of
 ``<out>.ips`` (one instruction pointer a line, from ``perf script -F ip``) per instruction, and writes
 ``<out>.annot`` (samples, share of the pass's samples, offset, instruction) and prints the share per 256-byte
