@@ -15,11 +15,15 @@ def block() -> str:
     return (ROOT / "reports" / "validation" / "source_figures.md").read_text().strip()
 
 
+def replace_block(path: Path, begin: str, end: str, text: str) -> None:
+    """Put ``text`` between the marker lines ``begin`` and ``end`` of the file at ``path``."""
+    content = path.read_text()
+    i, j = content.index(begin) + len(begin), content.index(end)
+    path.write_text(content[:i] + "\n" + text + "\n" + content[j:])
+
+
 def main():
-    readme = ROOT / "README.md"
-    text = readme.read_text()
-    i, j = text.index(BEGIN) + len(BEGIN), text.index(END)
-    readme.write_text(text[:i] + "\n" + block() + "\n" + text[j:])
+    replace_block(ROOT / "README.md", BEGIN, END, block())
 
 
 if __name__ == "__main__":

@@ -14,7 +14,11 @@ checks that the block between the markers equals what this script writes.
 """
 import json
 import statistics
+import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from update_readme_tables import replace_block  # noqa: E402  (the scripts/ folder, not a package)
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
@@ -65,32 +69,23 @@ def rows_by_n(d: dict) -> dict:
     return {int(r["n"]): r for r in d["rows"]}
 
 
-def table_3d() -> list[str]:
-    out = [
-        "| run (UTC) | host | rounds | own / LIGGGHTS 1e4 | own / LIGGGHTS 1e5 | LIGGGHTS's conventions 1e4 "
-        "| LIGGGHTS's conventions 1e5 | own / YADE 1e4 | own / YADE 1e5 | results (benchmarks/results/) |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for tag, host in RUNS_3D:
-        d = load(tag)
-        r = rows_by_n(d)
-        c = [cell(ratios(r[n], "demflow-1", "liggghts"), 1.5) for n in (10000, 100000)]
-        c += [cell(ratios(r[n], "demflow-1-matched", "liggghts"), 1.5) for n in (10000, 100000)]
-        c += [cell(ratios(r[n], "demflow-1", "yade"), 10.0) for n in (10000, 100000)]
-        out.append(f"| {d['info']['date'].removesuffix(' UTC')} | {host} | {d['info']['args']['rounds']} | "
-                   + " | ".join(c) + f" | `{tag}.md` |")
-    return out
+# Columns of each table: (header, numerator engine, denominator engine, target), at 1e4 and at 1e5.
+COLUMNS_3D = [("own / LIGGGHTS", "demflow-1", "liggghts", 1.5),
+              ("LIGGGHTS's conventions", "demflow-1-matched", "liggghts", 1.5),
+              ("own / YADE", "demflow-1", "yade", 10.0)]
+COLUMNS_2D = [("demflow / LIGGGHTS", "demflow-1", "liggghts", 3.0)]
+SIZES = (10000, 100000)
 
 
-def table_2d() -> list[str]:
-    out = [
-        "| run (UTC) | host | rounds | demflow / LIGGGHTS 1e4 | demflow / LIGGGHTS 1e5 | results (benchmarks/results/) |",
-        "|---|---|---|---|---|---|",
-    ]
-    for tag, host in RUNS_2D:
+def table(runs, columns) -> list[str]:
+    """One row per run: its date, host and rounds, then each column's ratio at each size."""
+    heads = [f"{h} {n}" for h, *_ in columns for n in ("1e4", "1e5")]
+    out = ["| " + " | ".join(["run (UTC)", "host", "rounds"] + heads + ["results (benchmarks/results/)"]) + " |",
+           "|" + "---|" * (len(heads) + 4)]
+    for tag, host in runs:
         d = load(tag)
         r = rows_by_n(d)
-        c = [cell(ratios(r[n], "demflow-1", "liggghts"), 3.0) for n in (10000, 100000)]
+        c = [cell(ratios(r[n], num, den), target) for _, num, den, target in columns for n in SIZES]
         out.append(f"| {d['info']['date'].removesuffix(' UTC')} | {host} | {d['info']['args']['rounds']} | "
                    + " | ".join(c) + f" | `{tag}.md` |")
     return out
@@ -99,15 +94,12 @@ def table_2d() -> list[str]:
 def block() -> str:
     return "\n".join(
         ["3D dense Hertz spheres (issue 13: ≥ 1.5× LIGGGHTS and ≥ 10× YADE, one core, at 1e4 and 1e5 in one run):",
-         ""] + table_3d()
-        + ["", "2D dense discs (issue 18 item 5: ≥ 3× LIGGGHTS, one core, at 1e4 and 1e5):", ""] + table_2d())
+         ""] + table(RUNS_3D, COLUMNS_3D)
+        + ["", "2D dense discs (issue 18 item 5: ≥ 3× LIGGGHTS, one core, at 1e4 and 1e5):", ""] + table(RUNS_2D, COLUMNS_2D))
 
 
 def main():
-    readme = ROOT / "README.md"
-    text = readme.read_text()
-    i, j = text.index(BEGIN) + len(BEGIN), text.index(END)
-    readme.write_text(text[:i] + "\n" + block() + "\n" + text[j:])
+    replace_block(ROOT / "README.md", BEGIN, END, block())
 
 
 if __name__ == "__main__":
