@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
-from .contacts.forces import pack_discs, pair_forces
+from .contacts.forces import NO_PAIRS, pack_discs, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search_ordered,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
@@ -488,7 +488,7 @@ class Simulation:
         diss, wwork = np.zeros(m), np.zeros(m)
         if m:
             pair_forces(pr.finder, pr.other, h, pr.sx, pr.sy, P, n, self.walls, self.law_params, self.box, self.dt,
-                        f, False, *pair_outputs(m), np.inf, diss, wwork)
+                        f, False, *pair_outputs(m), np.inf, diss, wwork, NO_PAIRS, False)
         # each disc's force and moment sums at step n (as demflow.integrate.sum_and_integrate), then v_{n+1/2}
         fx, fy, mo = np.zeros(n), np.zeros(n), np.zeros(n)
         if m:
@@ -634,7 +634,7 @@ class Simulation:
         out = pair_outputs(m)
         pair_forces(pr.finder, pr.other, pr.hist.copy(), pr.sx, pr.sy, P, self.n, self.walls, self.law_params,
                     self.box, self.dt, np.zeros((m, 3)), True, *out, np.inf, np.zeros(m),
-                    np.zeros(m))
+                    np.zeros(m), NO_PAIRS, False)
         fn, fs, slide, ovl, cpx, cpy = out
         on = ovl > 0
         i, j = self.finder[on], self.other[on]

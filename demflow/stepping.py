@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .contacts.forces import pack_discs, pair_forces, wall_sums
+from .contacts.forces import pack_discs, wall_sums
+from .contacts.forces_blocks import step_pair_forces
 from .integrate import Q_INERTIA, Q_MASS, pack_state, sum_and_integrate, unpack_state
 from .jit import njit
 from .laws.base import law_energy_add
@@ -270,9 +271,9 @@ def _steps(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, l
         step = step0 + s
         recording = rec.every > 0 and step % rec.every == 0 and rec_count < rec.step.shape[0]
         o = pairs.out
-        nbad = pair_forces(pairs.fin_p, pairs.oth_p, pairs.hist_p, pairs.sx_p, pairs.sy_p, P, nd, walls, law, box,
-                           dt, pairs.f, recording, o.fn, o.fs, o.slide, o.ovl, o.cpx, o.cpy, MAX_OVERLAP_RATIO,
-                           diss_pairs, wwork_pairs)
+        nbad = step_pair_forces(pairs.fin_p, pairs.oth_p, pairs.hist_p, pairs.sx_p, pairs.sy_p, P, nd, walls, law,
+                                box, dt, pairs.f, recording, o.fn, o.fs, o.slide, o.ovl, o.cpx, o.cpy,
+                                MAX_OVERLAP_RATIO, diss_pairs, wwork_pairs, pairs.wall_p)
         if nbad > 0:
             return s, BLOWUP, disp_walls, rec_count
         wall_sums(pairs.wall_p, pairs.oth_p, nd, pairs.f, pairs.out, walls)

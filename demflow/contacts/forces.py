@@ -36,10 +36,13 @@ from .neighbours import point_segment_distance
 # "apart" too, so skipping it changes no bit
 APART_MARGIN = 1.0 + 1e-12
 
+# pair_forces's ``wall_p`` when ``walls_only`` is False (not read)
+NO_PAIRS = np.zeros(0, np.int64)
+
 
 @njit_parallel
 def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
-                o_fn, o_fs, o_slide, o_ovl, o_cpx, o_cpy, max_overlap_ratio, diss, wwork):
+                o_fn, o_fs, o_slide, o_ovl, o_cpx, o_cpy, max_overlap_ratio, diss, wwork, wall_p, walls_only):
     """Evaluate every listed pair (thesis eqs 2.7-2.20) and update its history in place.
 
     fin, oth: the pairs (other >= n: wall other - n); hist: their history rows; sx, sy: image
@@ -54,12 +57,15 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
     in the step (:func:`demflow.laws.base.law_force_dissipation`; summed in pair order by the caller),
     and for a wall pair wwork[k] += the work the wall's contact point (velocity v_w) did on the disc,
     -(Fn_work v_w·ε + Fs_work v_w·τ)Δt.  Returns the number of pairs overlapping more than
-    ``max_overlap_ratio`` of the smaller radius or with a non-finite force (a blow-up).
+    ``max_overlap_ratio`` of the smaller radius or with a non-finite force (a blow-up).  With ``walls_only`` only
+    the pairs ``wall_p`` (the wall pairs' indices) are evaluated
+    (:func:`demflow.contacts.forces_blocks.step_pair_forces` does the others).
     """
-    m = fin.shape[0]
+    m = wall_p.shape[0] if walls_only else fin.shape[0]
     nbad = 0
     for kk in prange(m):
-        k = np.uint64(kk)  # unsigned indices: no wrap-around arithmetic for negative indices (module docstring)
+        # unsigned indices: no wrap-around arithmetic for negative indices (module docstring)
+        k = np.uint64(wall_p[kk]) if walls_only else np.uint64(kk)
         i = np.uint64(fin[k])
         j = oth[k]
         ju = np.uint64(j)  # the other disc's row (j < n)
