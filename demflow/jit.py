@@ -69,9 +69,12 @@ class PackageStampedLocator:
     installed demflow leaves its cache files behind the same way.  An index is now read only by the source it
     was written for; the files of this kernel written for other sources are removed when it saves anew."""
 
-    def __init__(self, base, name):
+    def __init__(self, base, name, py_file=None):
         self._base = base
         self._name = name  # Numba's file-name prefix of the kernel, module.qualname
+        # the kernel's source file, under the name Numba's locators give it: Numba's warning that a kernel cannot be
+        # cached reads it (numba.core.caching.CacheImpl.check_cachable)
+        self._py_file = py_file
 
     def ensure_cache_path(self):
         self._base.ensure_cache_path()
@@ -114,7 +117,7 @@ class PackageStampedLocator:
         for locator in _base_locators():
             base = _locator_class(locator).from_function(py_func, py_file)
             if base is not None:
-                return cls(base, name)
+                return cls(base, name, py_file)
         return None
 
 

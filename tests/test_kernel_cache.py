@@ -38,6 +38,18 @@ def test_demflow_kernels_carry_the_package_stamp():
         assert Path(loc.get_cache_path()).is_dir()
 
 
+def test_a_kernel_numba_cannot_cache_gets_numbas_warning_not_an_attribute_error():
+    """Numba's warning that a kernel cannot be cached (it uses dynamic globals, e.g. ``numba.get_num_threads()``
+    inside the kernel) names the kernel's file through its locator's ``_py_file``: the stamped locator had none,
+    and the warning's path raised AttributeError instead (found 2026-12-03 with such a kernel in demflow/)."""
+    import demflow.stepping3d
+    from demflow.stepping3d import body_step
+
+    loc = body_step._cache._impl.locator
+    assert isinstance(loc, jit.PackageStampedLocator)
+    assert Path(loc._py_file).resolve() == Path(demflow.stepping3d.__file__).resolve()
+
+
 def test_other_kernels_keep_numbas_locator(tmp_path: Path):
     """A user's kernel outside demflow's tree keeps Numba's own stamp."""
     import importlib.util

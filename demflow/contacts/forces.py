@@ -9,6 +9,10 @@ sums its shares, (fx, fy, Fs·R) as the finder and (-fx, -fy, Fs·R) as the othe
 (:func:`demflow.integrate.sum_and_integrate`, fixed order: results do not depend on the thread count).  A pair whose centres are certainly farther apart than the sum
 of the radii (d² > (R_i + R_j)²·APART_MARGIN) skips the square root on steps that do not record.
 
+For the linear law, a step that does not record evaluates the disc-disc pairs in blocks for the vector units
+instead (:mod:`demflow.contacts.forces_blocks`, the same numbers) and this kernel the wall pairs only
+(``walls_only``).
+
 The kernel is one loop for every law and every box: the law's compiled functions
 (:mod:`demflow.laws.base`) and the box's image rule (:func:`demflow.space.other_centre`) are
 selected by the types of the ``law`` and ``box`` structures when the cycle is compiled.

@@ -4,8 +4,17 @@
 another in scalar registers.  Here a block of pairs is (1) gathered, pair by pair, into a work array of
 columns (the centre difference, radii sum, relative velocities, the law's six numbers, the old history),
 (2) advanced in one loop over the block with no branch (every condition of the law a choice), which LLVM
-turns into vector instructions (4 lanes with AVX2, 8 with AVX-512: ``vsqrtpd``, ``vdivpd`` on whole
-registers), and (3) scattered back: the history, the force row and the dissipation sum of each pair.
+turns into vector instructions (on the AVX-512 host of 2026-12-03: ``vsqrtpd`` and ``vdivpd`` on 8-lane zmm
+registers, masked stores for the choices), and (3) scattered back: the history, the force row and the dissipation
+sum of each pair.  A block's columns are ``COL`` = BLOCK + 8 numbers long, not 2048 bytes: columns a multiple of
+4096 bytes apart made loads wait on unrelated stores (4K aliasing; on that host's 1e4-disc benchmark state the
+padding took the pass from 1.03 of the scalar pass's time to 0.74-0.77, ratio of the minima:
+benchmarks/results/speed_experiments_session45.md).  One material pair in a block (a packing of
+one material) fills the law's six columns once for the block instead of reading each pair's row.
+
+Measured (benchmarks/results/speed2d_session45_blocks_ab.md, in one process against the scalar pass, 20 rounds,
+AMD EPYC Zen 4): the whole 2D step 0.885 of its time at 1e4 discs (per-round median; ratio of the minima 0.896);
+at 1e5 0.992 (1.057): there the pass waits on memory, which the blocks do not change.
 
 The numbers are those of :func:`pair_forces` with :func:`demflow.laws.linear.linear_contact` to the bit:
 every operation is the same IEEE operation in the same order (a vector square root or division rounds as
