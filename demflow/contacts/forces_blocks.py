@@ -20,8 +20,9 @@ The numbers are those of :func:`pair_forces` with :func:`demflow.laws.linear.lin
 every operation is the same IEEE operation in the same order (a vector square root or division rounds as
 the scalar one does; no contraction into fused multiply-adds, no reassociation: ``fastmath`` stays off),
 and every branch of the scalar code is a choice between the same two values.  Pairs not touching get zero
-force and lose their history; a touching pair's dissipation is added to ``diss`` (a pair not touching
-leaves it as it was, so a -0.0 stays -0.0).  The golden tests and tests/test_forces_blocks.py hold the two
+force and lose their history; every pair adds its dissipation to ``diss``, 0.0 for a pair not touching, which
+leaves a sum as it was unless the sum is -0.0: the sums start at +0.0 (:func:`demflow.stepping.run_steps`: zero on
+entry) and a round-to-nearest sum is -0.0 only when both terms are.  The golden tests and tests/test_forces_blocks.py hold the two
 passes equal.
 
 Only what the vector loop can do is done here: disc-disc pairs on steps that do not record.  Wall pairs
