@@ -45,6 +45,7 @@ RUNS_2D = [
     ("engines_speed_zen4_session43", "AMD EPYC Zen 4 (znver4), AVX-512", SCALAR_2D),
     ("engines_speed_rkl_session44", "Intel Xeon, family 6 model 167 (rocketlake), AVX-512", SCALAR_2D),
     ("engines_speed_zen4_session45", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D),
+    ("engines_speed_zen4_session45_second", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D),
 ]
 
 
