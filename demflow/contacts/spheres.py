@@ -31,6 +31,11 @@ import numpy as np
 
 from ..jit import njit, njit_inline
 from ..laws.base import law_energy3, law_force3, law_turns_history
+from .spheres_blocks import (AI_AT, AJ_AT, BLOCK, CX_AT, CY_AT, CZ_AT, DISS_AT, FN_AT, FX_AT, FY_AT, FZ_AT, H0_AT,
+                             H1_AT, H2_AT, LANES, MA_AT, MB_AT, MEFF_AT, NH0_AT, NH1_AT, NH2_AT, NX_AT, NY_AT, NZ_AT,
+                             OV_AT, RI_AT, RJ_AT, RSTAR_AT, SLIDE_AT, TX_AT, TY_AT, TZ_AT, VIX_AT, VIY_AT, VIZ_AT,
+                             VJX_AT, VJY_AT, VJZ_AT, WIX_AT, WIY_AT, WIZ_AT, WJX_AT, WJY_AT, WJZ_AT, hertz_blocks,
+                             law_block3, law_columns, law_fill, work_array)
 
 OK = 0
 BLOWUP_OVERLAP = 1
@@ -598,7 +603,7 @@ def _separation(P, pairs, k):
     return dx, dy, dz, dx * dx + dy * dy + dz * dz, P[i, 9] + P[j, 9]
 
 
-BLOCK = 256  # listed pairs staged per block (module docstring of sphere_forces)
+# BLOCK (spheres_blocks): listed pairs staged per block (module docstring of sphere_forces)
 
 
 @njit
@@ -651,6 +656,10 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     qinv = np.empty(BLOCK)
     qm = np.empty(BLOCK)  # sphere pairs: the effective mass and radius (stage 2)
     qr = np.empty(BLOCK)
+    vec = hertz_blocks(law)  # the sphere pairs' law in vector lanes (demflow.contacts.spheres_blocks)
+    W = work_array(law)
+    filled = False  # the law columns hold material m_first's numbers in every lane
+    m_first = P[0, 11] if n else 0.0  # a material of the scene: the padding lanes' (their law numbers are read)
     for k0 in range(0, m, BLOCK):
         k1 = min(k0 + BLOCK, m)
         nq = 0
@@ -671,6 +680,10 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 qz[slot] = dz
                 qd2[slot] = d2
                 qk[slot] = k
+                if vec:  # the history row, read here in pair order (read in stage 2 it waited on memory)
+                    W[H0_AT + slot] = hist[ku, 0]
+                    W[H1_AT + slot] = hist[ku, 1]
+                    W[H2_AT + slot] = hist[ku, 2]
                 nq += 1 - apart
                 rk[np.uint64(nr)] = k
                 nr += apart * np.int64(recording | (pairs.ovl[ku] != -1.0))
@@ -695,8 +708,109 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             dist = math.sqrt(abs(qd2[t]))
             qdist[t] = dist
             qinv[t] = 1.0 / dist
+        if vec:  # the lanes of the work array (demflow.contacts.spheres_blocks): written here, not by a helper
+            # (an inlined helper handed an array keeps an atomic reference-count update per call)
+            mixed = False
+            for t in range(nq):
+                tu = np.uint64(t)
+                if qd2[tu] < 0.0:  # a plane's or triangle's slot: a benign lane, never read
+                    W[NX_AT + tu] = 1.0
+                    W[NY_AT + tu] = 0.0
+                    W[NZ_AT + tu] = 0.0
+                    W[OV_AT + tu] = 1.0
+                    W[MEFF_AT + tu] = 1.0
+                    W[RSTAR_AT + tu] = 1.0
+                    W[VIX_AT + tu] = 0.0
+                    W[VIY_AT + tu] = 0.0
+                    W[VIZ_AT + tu] = 0.0
+                    W[WIX_AT + tu] = 0.0
+                    W[WIY_AT + tu] = 0.0
+                    W[WIZ_AT + tu] = 0.0
+                    W[VJX_AT + tu] = 0.0
+                    W[VJY_AT + tu] = 0.0
+                    W[VJZ_AT + tu] = 0.0
+                    W[WJX_AT + tu] = 0.0
+                    W[WJY_AT + tu] = 0.0
+                    W[WJZ_AT + tu] = 0.0
+                    W[H0_AT + tu] = 0.0
+                    W[H1_AT + tu] = 0.0
+                    W[H2_AT + tu] = 0.0
+                    W[MA_AT + tu] = m_first
+                    W[MB_AT + tu] = m_first
+                    continue
+                k = np.uint64(qk[tu])
+                i = np.uint64(pairs.i[k])
+                j = np.uint64(pairs.j[k])
+                dist = qdist[tu]
+                ri = P[i, 9]
+                rj = P[j, 9]
+                rs = ri + rj
+                inv = qinv[tu]
+                W[NX_AT + tu] = qx[tu] * inv
+                W[NY_AT + tu] = qy[tu] * inv
+                W[NZ_AT + tu] = qz[tu] * inv
+                W[OV_AT + tu] = rs - dist
+                mi = P[i, 10]
+                mj = P[j, 10]
+                if P[j, 12] != 0.0:
+                    meff = mi
+                elif P[i, 12] != 0.0:
+                    meff = mj
+                else:
+                    meff = mi * mj / (mi + mj)
+                W[MEFF_AT + tu] = meff
+                W[RSTAR_AT + tu] = ri * rj / rs
+                W[RI_AT + tu] = ri
+                W[RJ_AT + tu] = rj
+                W[VIX_AT + tu] = P[i, 3]
+                W[VIY_AT + tu] = P[i, 4]
+                W[VIZ_AT + tu] = P[i, 5]
+                W[WIX_AT + tu] = P[i, 6]
+                W[WIY_AT + tu] = P[i, 7]
+                W[WIZ_AT + tu] = P[i, 8]
+                W[VJX_AT + tu] = P[j, 3]
+                W[VJY_AT + tu] = P[j, 4]
+                W[VJZ_AT + tu] = P[j, 5]
+                W[WJX_AT + tu] = P[j, 6]
+                W[WJY_AT + tu] = P[j, 7]
+                W[WJZ_AT + tu] = P[j, 8]
+                ma = P[i, 11]
+                mb = P[j, 11]
+                W[MA_AT + tu] = ma
+                W[MB_AT + tu] = mb
+                mixed |= (ma != m_first) | (mb != m_first)
+            nl = (nq + LANES - 1) // LANES * LANES
+            for t in range(nq, nl):  # padding lanes: benign
+                tu = np.uint64(t)
+                W[OV_AT + tu] = 1.0
+                W[VIX_AT + tu] = 0.0
+                W[VIY_AT + tu] = 0.0
+                W[VIZ_AT + tu] = 0.0
+                W[WIX_AT + tu] = 0.0
+                W[WIY_AT + tu] = 0.0
+                W[WIZ_AT + tu] = 0.0
+                W[VJX_AT + tu] = 0.0
+                W[VJY_AT + tu] = 0.0
+                W[VJZ_AT + tu] = 0.0
+                W[WJX_AT + tu] = 0.0
+                W[WJY_AT + tu] = 0.0
+                W[WJZ_AT + tu] = 0.0
+                W[H0_AT + tu] = 0.0
+                W[H1_AT + tu] = 0.0
+                W[H2_AT + tu] = 0.0
+                W[MA_AT + tu] = m_first
+                W[MB_AT + tu] = m_first
+            # the law's columns: each lane's material pair, or one fill for blocks of one material (kept while
+            # the blocks that follow are of it too)
+            if mixed:
+                law_columns(law, W, nl)
+                filled = False
+            elif not filled:
+                law_fill(law, W, m_first)
+                filled = True
+            law_block3(law, W, nl, dt)
         for t in range(nq):
-            if qd2[t] < 0.0:
+            if vec or qd2[t] < 0.0:
                 continue
             k = np.uint64(qk[t])
             i = np.uint64(pairs.i[k])
@@ -757,6 +871,46 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 rmin = ri
                 if not turns:
                     rotate_history(hist, k, nx, ny, nz)
+            elif vec and j < n:
+                tu = np.uint64(t)
+                overlap = W[OV_AT + tu]
+                if overlap > max_overlap_ratio * min(ri, W[RJ_AT + tu]):
+                    status = BLOWUP_OVERLAP
+                hist[k, 0] = W[NH0_AT + tu]
+                hist[k, 1] = W[NH1_AT + tu]
+                hist[k, 2] = W[NH2_AT + tu]
+                diss += W[DISS_AT + tu]
+                ai = W[AI_AT + tu]
+                aj = W[AJ_AT + tu]
+                fx = W[FX_AT + tu]
+                fy = W[FY_AT + tu]
+                fz = W[FZ_AT + tu]
+                cx = W[CX_AT + tu]
+                cy = W[CY_AT + tu]
+                cz = W[CZ_AT + tu]
+                FM[i, 0] += fx
+                FM[i, 1] += fy
+                FM[i, 2] += fz
+                FM[i, 3] += ai * cx
+                FM[i, 4] += ai * cy
+                FM[i, 5] += ai * cz
+                FM[ju, 0] -= fx
+                FM[ju, 1] -= fy
+                FM[ju, 2] -= fz
+                FM[ju, 3] += aj * cx
+                FM[ju, 4] += aj * cy
+                FM[ju, 5] += aj * cz
+                pairs.ovl[k] = overlap
+                pairs.fn[k] = W[FN_AT + tu]
+                pairs.ft[k, 0] = W[TX_AT + tu]
+                pairs.ft[k, 1] = W[TY_AT + tu]
+                pairs.ft[k, 2] = W[TZ_AT + tu]
+                pairs.slide[k] = 1 if W[SLIDE_AT + tu] != 0.0 else 0
+                if recording:
+                    ma = np.uint64(np.int64(P[i, 11]))
+                    mb = np.uint64(np.int64(P[ju, 11]))
+                    energy = law_energy3(law, energy, hist, k, ma, mb, W[RSTAR_AT + tu], overlap)
+                continue
             elif j < n:
                 nx = qx[t]
                 ny = qy[t]
