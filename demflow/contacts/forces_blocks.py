@@ -38,12 +38,13 @@ from numba.extending import overload
 
 from ..jit import njit, njit_parallel
 from ..laws.base import is_params_of
-from ..laws.linear import LinearParams
+from ..laws.linear import LinearParams, linear_contact
 from ..space import other_centre
 from .forces import pair_forces
 
 BLOCK = 256  # pairs per block: a fixed trip count, so the vector loop's columns are provably apart
 COL = BLOCK + 8  # a column's length in the work arrays: columns not 4096 bytes apart (no 4K aliasing)
+CHUNK = 16  # blocks per parallel task (its work arrays allocated once); the results do not depend on it
 
 # the work array's input columns (each BLOCK long)
 _DX, _DY, _RS, _RMIN, _RVX, _RVY, _SPIN, _KN, _KS, _CN, _CS, _MU, _COH, _NOLD, _SOLD = range(15)
@@ -91,33 +92,9 @@ def linear_block(W, O, dt, normal_mode, sliding_mode, has_shear, max_overlap_rat
         ty = -ex
         ndot = rvx * ex + rvy * ey
         sdot = rvx * tx + rvy * ty - spin
-        # linear_contact (eqs 2.13-2.19)
-        if normal_mode == 0:
-            N = n_old + kn * ndot * dt
-        else:
-            N = kn * overlap
-        if N < 0.0:
-            N = 0.0
-        Fn = N + cn * ndot
-        if Fn < 0.0:
-            Fn = 0.0
-        S = 0.0
-        Fs = 0.0
-        sliding = False
-        if has_shear:
-            S_trial = s_old + ks * sdot * dt
-            Ds = cs * sdot
-            if sliding_mode == 0:
-                smax = mu * Fn + coh
-                sliding = abs(S_trial) > smax
-                capped = np.copysign(smax, S_trial)
-            else:
-                smax = abs(N * mu + coh)
-                sliding = abs(S_trial + Ds) > smax
-                capped = np.copysign(smax, S_trial + Ds)
-            S = capped if sliding else S_trial
-            Ds = 0.0 if sliding else Ds
-            Fs = S + Ds
+        # the law (eqs 2.13-2.19): LLVM inlines it, and its branches become choices of the vector loop
+        N, S, Fn, Fs, sliding = linear_contact(overlap, ndot, sdot, n_old, s_old, dt, kn, ks, cn, cs, mu, coh,
+                                               normal_mode, sliding_mode, has_shear)
         dissipated = ((Fn - N) * ndot + (Fs - S) * sdot) * dt
         slip = abs(S) * abs(s_old + ks * sdot * dt - S) / ks
         if sliding and ks > 0.0:
@@ -150,75 +127,79 @@ def linear_pair_forces(fin, oth, hist, sx, sy, P, n, law, box, dt, f, max_overla
     normal_mode = law.normal_mode
     sliding_mode = law.sliding_mode
     nbad = 0
-    for b in prange(nblocks):
+    nchunks = (nblocks + CHUNK - 1) // CHUNK
+    for chunk in prange(nchunks):  # the work arrays allocated once per chunk of blocks
         W = np.empty(N_IN * C)
         O = np.empty(N_OUT * C)
         mats = np.empty(2 * B, np.uint64)  # the block's material pairs (ma, mb), gathered with the geometry
-        k0 = b * B
-        nb = min(B, m - k0)
-        m0 = np.uint64(np.int64(P[np.uint64(fin[np.uint64(k0)]), 6]))  # the first pair's finder's material
-        mixed = False
-        for q in range(nb):
-            k = np.uint64(k0 + q)
-            j = oth[k]
-            if j >= n:  # a wall pair: apart (an overlap of -1), never written back
+        cbad = 0
+        for b in range(chunk * CHUNK, min((chunk + 1) * CHUNK, nblocks)):
+            k0 = b * B
+            nb = min(B, m - k0)
+            m0 = np.uint64(np.int64(P[np.uint64(fin[np.uint64(k0)]), 6]))  # the first pair's finder's material
+            mixed = False
+            for q in range(nb):
+                k = np.uint64(k0 + q)
+                j = oth[k]
+                if j >= n:  # a wall pair: apart (an overlap of -1), never written back
+                    W[_DX * C + q] = 0.0
+                    W[_DY * C + q] = 0.0
+                    W[_RS * C + q] = -1.0
+                    mats[2 * q] = m0
+                    mats[2 * q + 1] = m0
+                    continue
+                i = np.uint64(fin[k])
+                ju = np.uint64(j)
+                xi = P[i, 0]
+                yi = P[i, 1]
+                ri = P[i, 5]
+                rj = P[ju, 5]
+                xj, yj = other_centre(box, sx, sy, k, P[ju, 0], P[ju, 1])
+                W[_DX * C + q] = xj - xi
+                W[_DY * C + q] = yj - yi
+                W[_RS * C + q] = ri + rj
+                W[_RMIN * C + q] = min(ri, rj)
+                W[_RVX * C + q] = P[i, 2] - P[ju, 2]
+                W[_RVY * C + q] = P[i, 3] - P[ju, 3]
+                W[_SPIN * C + q] = P[i, 4] * ri + P[ju, 4] * rj
+                ma = np.uint64(np.int64(P[i, 6]))
+                mb = np.uint64(np.int64(P[ju, 6]))
+                mats[2 * q] = ma
+                mats[2 * q + 1] = mb
+                mixed |= (ma != m0) | (mb != m0)
+                W[_NOLD * C + q] = hist[k, 0]
+                W[_SOLD * C + q] = hist[k, 1] if has_shear else 0.0
+            # the law's six numbers per lane: one row for the whole block when every pair has the same materials
+            # (a packing of one material: no per-pair reads), else each pair's row
+            if mixed:
+                for q in range(nb):
+                    ma = mats[2 * q]
+                    mb = mats[2 * q + 1]
+                    for c in range(6):
+                        W[(_KN + c) * C + q] = row[ma, mb, c]
+            else:
+                for c in range(6):
+                    v = row[m0, m0, c]
+                    for q in range(B):
+                        W[(_KN + c) * C + q] = v
+            for q in range(nb, B):  # padding lanes: apart
                 W[_DX * C + q] = 0.0
                 W[_DY * C + q] = 0.0
                 W[_RS * C + q] = -1.0
-                mats[2 * q] = m0
-                mats[2 * q + 1] = m0
-                continue
-            i = np.uint64(fin[k])
-            ju = np.uint64(j)
-            xi = P[i, 0]
-            yi = P[i, 1]
-            ri = P[i, 5]
-            rj = P[ju, 5]
-            xj, yj = other_centre(box, sx, sy, k, P[ju, 0], P[ju, 1])
-            W[_DX * C + q] = xj - xi
-            W[_DY * C + q] = yj - yi
-            W[_RS * C + q] = ri + rj
-            W[_RMIN * C + q] = min(ri, rj)
-            W[_RVX * C + q] = P[i, 2] - P[ju, 2]
-            W[_RVY * C + q] = P[i, 3] - P[ju, 3]
-            W[_SPIN * C + q] = P[i, 4] * ri + P[ju, 4] * rj
-            ma = np.uint64(np.int64(P[i, 6]))
-            mb = np.uint64(np.int64(P[ju, 6]))
-            mats[2 * q] = ma
-            mats[2 * q + 1] = mb
-            mixed |= (ma != m0) | (mb != m0)
-            W[_NOLD * C + q] = hist[k, 0]
-            W[_SOLD * C + q] = hist[k, 1] if has_shear else 0.0
-        # the law's six numbers per lane: one row for the whole block when every pair has the same materials
-        # (a packing of one material: no per-pair reads), else each pair's row
-        if mixed:
+            bad = linear_block(W, O, dt, normal_mode, sliding_mode, has_shear, max_overlap_ratio)
             for q in range(nb):
-                ma = mats[2 * q]
-                mb = mats[2 * q + 1]
-                for c in range(6):
-                    W[(_KN + c) * C + q] = row[ma, mb, c]
-        else:
-            for c in range(6):
-                v = row[m0, m0, c]
-                for q in range(B):
-                    W[(_KN + c) * C + q] = v
-        for q in range(nb, B):  # padding lanes: apart
-            W[_DX * C + q] = 0.0
-            W[_DY * C + q] = 0.0
-            W[_RS * C + q] = -1.0
-        bad = linear_block(W, O, dt, normal_mode, sliding_mode, has_shear, max_overlap_ratio)
-        for q in range(nb):
-            k = np.uint64(k0 + q)
-            if oth[k] >= n:
-                continue
-            hist[k, 0] = O[_N * C + q]
-            if has_shear:
-                hist[k, 1] = O[_S * C + q]
-            f[k, 0] = O[_FX * C + q]
-            f[k, 1] = O[_FY * C + q]
-            f[k, 2] = O[_FS * C + q]
-            diss[k] += O[_DISS * C + q]
-        nbad += bad
+                k = np.uint64(k0 + q)
+                if oth[k] >= n:
+                    continue
+                hist[k, 0] = O[_N * C + q]
+                if has_shear:
+                    hist[k, 1] = O[_S * C + q]
+                f[k, 0] = O[_FX * C + q]
+                f[k, 1] = O[_FY * C + q]
+                f[k, 2] = O[_FS * C + q]
+                diss[k] += O[_DISS * C + q]
+            cbad += bad
+        nbad += cbad
     return nbad
 
 

@@ -628,7 +628,14 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     together (benchmarks/results/speed3d_session34_ab.md).  The law's tables are read with unsigned material indices
     too: Numba's wrap-around test of a signed index cost 44 of the 370 instructions of a touching pair's path and
     8.5 % of the pass's instructions (valgrind's callgrind; the step's time moved within the A/B's noise:
-    benchmarks/results/speed_experiments_session39.md)."""
+    benchmarks/results/speed_experiments_session39.md).
+
+    For a Hertz-Mindlin scene without Mindlin-Deresiewicz (:func:`demflow.contacts.spheres_blocks.hertz_blocks`)
+    stages 2 and 3 take the vector path: stage 1 also copies each queued pair's history row into the work array
+    (in pair order, so the reads stream), stage 2 writes each queued sphere pair's normal, overlap, masses, radii,
+    velocities and materials into its lane, :func:`demflow.contacts.spheres_blocks.hertz_block` turns the history
+    and evaluates the law for all lanes at once (vector instructions), and stage 3 adds the lanes' forces in pair
+    order; planes and triangles keep the scalar path.  The same bits (tests/test_spheres_blocks.py)."""
     n = sp.P.shape[0]
     P = sp.P
     FM = sp.FM

@@ -4,11 +4,13 @@
 pair order, turns each pair's history into the new tangent plane, evaluates the law
 (:func:`demflow.laws.hertz_mindlin.hertz_contact3`) and adds the forces (stage 3): a touching pair's three to five
 square roots and two or three divisions run one after another in scalar registers, behind branches.  For a
-Hertz-Mindlin scene whose every material pair uses Mindlin's no-slip stiffness (``tangential="mindlin"``, the
-engines' model) the pass instead gathers each queued sphere pair's numbers into the columns of one work array
-(:func:`gather_pair`), advances all of them in :func:`hertz_block` -- one loop without a branch, every condition
-of the rotation and of the law a choice between two values, which LLVM compiles to vector instructions -- and
-adds the forces in pair order from the columns (stage 3).  Planes and triangles keep the scalar path.
+Hertz-Mindlin scene without Mindlin-Deresiewicz (every material pair's tangential model Mindlin's no-slip stiffness,
+the engines' model, or none) the pass instead writes each queued sphere pair's numbers into its lane of one work
+array (in :func:`demflow.contacts.spheres.sphere_forces` itself: an inlined helper handed the array would keep an
+atomic reference-count update per pair), advances all lanes in :func:`hertz_block` -- one loop without a branch,
+every condition of the rotation and of the law a choice between two values, which LLVM compiles to vector
+instructions (zmm ``vsqrtpd``/``vdivpd`` on the AVX-512 host of 2026-12-03) -- and adds the forces in pair order from
+the lanes (stage 3).  Planes and triangles keep the scalar path.
 
 The numbers are those of the scalar path to the bit: every operation is the same IEEE operation in the same order
 (a vector square root or division rounds as the scalar one does; ``fastmath`` stays off, so nothing is contracted
