@@ -663,6 +663,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
     qinv = np.empty(BLOCK)
     qm = np.empty(BLOCK)  # sphere pairs: the effective mass and radius (stage 2)
     qr = np.empty(BLOCK)
+    qi = np.empty(BLOCK, np.uint64)  # the vector path's sphere pairs: their rows (stage 2, for stage 3)
+    qj = np.empty(BLOCK, np.uint64)
     vec = hertz_blocks(law)  # the sphere pairs' law in vector lanes (demflow.contacts.spheres_blocks)
     W = work_array(law)
     filled = False  # the law columns hold material m_first's numbers in every lane
@@ -748,6 +750,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 k = np.uint64(qk[tu])
                 i = np.uint64(pairs.i[k])
                 j = np.uint64(pairs.j[k])
+                qi[tu] = i
+                qj[tu] = j
                 dist = qdist[tu]
                 ri = P[i, 9]
                 rj = P[j, 9]
@@ -847,41 +851,13 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             qr[t] = ri * rj / rs
         # stage 3: the law and the sums, in pair order
         for t in range(nq):
-            k = np.uint64(qk[t])
-            i = np.uint64(pairs.i[k])
-            j = pairs.j[k]
-            ju = np.uint64(j)  # the other sphere's row (j < n)
-            ri = P[i, 9]
-            if j >= n + nw:  # a triangle
-                q += 1
-                w = tris.wall[j - n - nw]
-                dx = tcp[q, 0] - P[i, 0]
-                dy = tcp[q, 1] - P[i, 1]
-                dz = tcp[q, 2] - P[i, 2]
-                dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-                overlap = ri - dist
-                if not tact[q] or dist == 0.0:
-                    _apart(pairs, k, min(overlap, 0.0))
-                    continue
-                nx = dx / dist
-                ny = dy / dist
-                nz = dz / dist
-                ai = ri - 0.5 * overlap
-                aj = 0.0
-                vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
-                vjx = planes.vel[w, 0]
-                vjy = planes.vel[w, 1]
-                vjz = planes.vel[w, 2]
-                meff = P[i, 10]
-                rstar = ri
-                mb = np.uint64(planes.mat[w])
-                rmin = ri
-                if not turns:
-                    rotate_history(hist, k, nx, ny, nz)
-            elif vec and j < n:
+            if vec and qd2[t] >= 0.0:  # a sphere pair's lane (its rows and index kept by stage 2)
                 tu = np.uint64(t)
+                k = np.uint64(qk[tu])
+                i = qi[tu]
+                ju = qj[tu]
                 overlap = W[OV_AT + tu]
-                if overlap > max_overlap_ratio * min(ri, W[RJ_AT + tu]):
+                if overlap > max_overlap_ratio * min(W[RI_AT + tu], W[RJ_AT + tu]):
                     status = BLOWUP_OVERLAP
                 hist[k, 0] = W[NH0_AT + tu]
                 hist[k, 1] = W[NH1_AT + tu]
@@ -918,6 +894,37 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                     mb = np.uint64(np.int64(P[ju, 11]))
                     energy = law_energy3(law, energy, hist, k, ma, mb, W[RSTAR_AT + tu], overlap)
                 continue
+            k = np.uint64(qk[t])
+            i = np.uint64(pairs.i[k])
+            j = pairs.j[k]
+            ju = np.uint64(j)  # the other sphere's row (j < n)
+            ri = P[i, 9]
+            if j >= n + nw:  # a triangle
+                q += 1
+                w = tris.wall[j - n - nw]
+                dx = tcp[q, 0] - P[i, 0]
+                dy = tcp[q, 1] - P[i, 1]
+                dz = tcp[q, 2] - P[i, 2]
+                dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+                overlap = ri - dist
+                if not tact[q] or dist == 0.0:
+                    _apart(pairs, k, min(overlap, 0.0))
+                    continue
+                nx = dx / dist
+                ny = dy / dist
+                nz = dz / dist
+                ai = ri - 0.5 * overlap
+                aj = 0.0
+                vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
+                vjx = planes.vel[w, 0]
+                vjy = planes.vel[w, 1]
+                vjz = planes.vel[w, 2]
+                meff = P[i, 10]
+                rstar = ri
+                mb = np.uint64(planes.mat[w])
+                rmin = ri
+                if not turns:
+                    rotate_history(hist, k, nx, ny, nz)
             elif j < n:
                 nx = qx[t]
                 ny = qy[t]
