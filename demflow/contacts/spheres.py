@@ -35,7 +35,7 @@ from .spheres_blocks import (AI_AT, AJ_AT, BLOCK, CX_AT, CY_AT, CZ_AT, DISS_AT, 
                              H1_AT, H2_AT, LANES, MA_AT, MB_AT, MEFF_AT, NH0_AT, NH1_AT, NH2_AT, NX_AT, NY_AT, NZ_AT,
                              OV_AT, RI_AT, RJ_AT, RSTAR_AT, SLIDE_AT, TX_AT, TY_AT, TZ_AT, VIX_AT, VIY_AT, VIZ_AT,
                              VJX_AT, VJY_AT, VJZ_AT, WIX_AT, WIY_AT, WIZ_AT, WJX_AT, WJY_AT, WJZ_AT, hertz_blocks,
-                             law_block3, law_columns, law_fill, work_array)
+                             lane_energy, law_block3, law_columns, law_fill, work_array)
 
 OK = 0
 BLOWUP_OVERLAP = 1
@@ -892,7 +892,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 if recording:
                     ma = np.uint64(np.int64(P[i, 11]))
                     mb = np.uint64(np.int64(P[ju, 11]))
-                    energy = law_energy3(law, energy, hist, k, ma, mb, W[RSTAR_AT + tu], overlap)
+                    energy = lane_energy(law, energy, hist, k, ma, mb, W[RSTAR_AT + tu], overlap)
                 continue
             k = np.uint64(qk[t])
             i = np.uint64(pairs.i[k])

@@ -33,7 +33,7 @@ from numba.extending import overload
 from ..jit import njit, njit_inline
 from ..laws.hertz_mindlin import (CAP_TOTAL, HERTZ_PARAMS_TYPES, HertzParams, ROTATION_PROJECT, SHEAR_TOTAL,
                                   TANGENTIAL_MINDLIN)
-from ..laws.base import is_params_of
+from ..laws.base import is_params_of, law_energy3
 
 BLOCK = 256  # the pair pass's block (demflow.contacts.spheres.BLOCK): at most BLOCK queued pairs
 COL = BLOCK + 8  # a column's length: columns not 4096 bytes apart
@@ -94,6 +94,13 @@ def law_columns(law, W, nl):
     raise NotImplementedError
 
 
+def lane_energy(law, e, hist, k, ma, mb, rstar, overlap):
+    """e plus the elastic energy of a lane's contact k (:func:`demflow.laws.base.law_energy3` for the Hertz-Mindlin
+    law; e itself for a law without lanes, a branch never taken).  Compiled per law (overload): the linear law's
+    energy inlined a second time into the pass set off Numba's internal check (NumbaIRAssumptionWarning)."""
+    raise NotImplementedError
+
+
 def law_block3(law, W, nl, dt):
     """:func:`hertz_block` on lanes 0..nl-1 with the law's scene-wide modes.  Compiled per law (overload)."""
     raise NotImplementedError
@@ -150,6 +157,18 @@ def _law_columns(law, W, nl):
             W[ZN * C + t] = law.zn[ma, mb]
             W[ZT * C + t] = law.zt[ma, mb]
             W[TG * C + t] = 1.0 if law.tangential[ma, mb] == TANGENTIAL_MINDLIN else 0.0
+    return impl
+
+
+@overload(lane_energy, inline="always")
+def _lane_energy(law, e, hist, k, ma, mb, rstar, overlap):
+    if not any(is_params_of(law, cls) for cls in HERTZ_PARAMS_TYPES):
+        def impl(law, e, hist, k, ma, mb, rstar, overlap):
+            return e
+        return impl
+
+    def impl(law, e, hist, k, ma, mb, rstar, overlap):
+        return law_energy3(law, e, hist, k, ma, mb, rstar, overlap)
     return impl
 
 
