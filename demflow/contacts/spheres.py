@@ -31,11 +31,10 @@ import numpy as np
 
 from ..jit import njit, njit_inline
 from ..laws.base import law_energy3, law_force3, law_turns_history
-from .spheres_blocks import (AI_AT, AJ_AT, BLOCK, CX_AT, CY_AT, CZ_AT, DISS_AT, FN_AT, FX_AT, FY_AT, FZ_AT, H0_AT,
-                             H1_AT, H2_AT, LANES, MA_AT, MB_AT, MEFF_AT, NH0_AT, NH1_AT, NH2_AT, NX_AT, NY_AT, NZ_AT,
-                             OV_AT, RI_AT, RJ_AT, RSTAR_AT, SLIDE_AT, TX_AT, TY_AT, TZ_AT, VIX_AT, VIY_AT, VIZ_AT,
-                             VJX_AT, VJY_AT, VJZ_AT, WIX_AT, WIY_AT, WIZ_AT, WJX_AT, WJY_AT, WJZ_AT, hertz_blocks,
-                             lane_energy, law_block3, law_columns, law_fill, work_array)
+from .spheres_blocks import (AI_AT, AJ_AT, BLOCK, COL, CX_AT, CY_AT, CZ_AT, DISS_AT, FN_AT, FX_AT, FY_AT, FZ_AT,
+                             H0_AT, H1_AT, H2_AT, LANES, MA_AT, MB_AT, MEFF_AT, NH0_AT, NH1_AT, NH2_AT, NX_AT, NY_AT,
+                             NZ_AT, OV_AT, RI_AT, RJ_AT, RSTAR_AT, SLIDE_AT, TX_AT, TY_AT, TZ_AT, VIX_AT, VJX_AT,
+                             hertz_blocks, law_block3, law_columns, law_fill, work_array)
 
 OK = 0
 BLOWUP_OVERLAP = 1
@@ -722,29 +721,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             mixed = False
             for t in range(nq):
                 tu = np.uint64(t)
-                if qd2[tu] < 0.0:  # a plane's or triangle's slot: a benign lane, never read
-                    W[NX_AT + tu] = 1.0
-                    W[NY_AT + tu] = 0.0
-                    W[NZ_AT + tu] = 0.0
-                    W[OV_AT + tu] = 1.0
-                    W[MEFF_AT + tu] = 1.0
-                    W[RSTAR_AT + tu] = 1.0
-                    W[VIX_AT + tu] = 0.0
-                    W[VIY_AT + tu] = 0.0
-                    W[VIZ_AT + tu] = 0.0
-                    W[WIX_AT + tu] = 0.0
-                    W[WIY_AT + tu] = 0.0
-                    W[WIZ_AT + tu] = 0.0
-                    W[VJX_AT + tu] = 0.0
-                    W[VJY_AT + tu] = 0.0
-                    W[VJZ_AT + tu] = 0.0
-                    W[WJX_AT + tu] = 0.0
-                    W[WJY_AT + tu] = 0.0
-                    W[WJZ_AT + tu] = 0.0
-                    W[H0_AT + tu] = 0.0
-                    W[H1_AT + tu] = 0.0
-                    W[H2_AT + tu] = 0.0
-                    W[MA_AT + tu] = m_first
+                if qd2[tu] < 0.0:  # a plane's or triangle's slot: the lane keeps earlier numbers, computed, never read
+                    W[MA_AT + tu] = m_first  # (a material the law's tables hold, for law_columns)
                     W[MB_AT + tu] = m_first
                     continue
                 k = np.uint64(qk[tu])
@@ -773,44 +751,19 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 W[RSTAR_AT + tu] = ri * rj / rs
                 W[RI_AT + tu] = ri
                 W[RJ_AT + tu] = rj
-                W[VIX_AT + tu] = P[i, 3]
-                W[VIY_AT + tu] = P[i, 4]
-                W[VIZ_AT + tu] = P[i, 5]
-                W[WIX_AT + tu] = P[i, 6]
-                W[WIY_AT + tu] = P[i, 7]
-                W[WIZ_AT + tu] = P[i, 8]
-                W[VJX_AT + tu] = P[j, 3]
-                W[VJY_AT + tu] = P[j, 4]
-                W[VJZ_AT + tu] = P[j, 5]
-                W[WJX_AT + tu] = P[j, 6]
-                W[WJY_AT + tu] = P[j, 7]
-                W[WJZ_AT + tu] = P[j, 8]
+                for a in range(6):  # velocity and spin of each sphere (columns VIX..WIZ, VJX..WJZ), unrolled
+                    col = np.uint64(a * COL)
+                    W[VIX_AT + col + tu] = P[i, 3 + a]
+                    W[VJX_AT + col + tu] = P[j, 3 + a]
                 ma = P[i, 11]
                 mb = P[j, 11]
                 W[MA_AT + tu] = ma
                 W[MB_AT + tu] = mb
                 mixed |= (ma != m_first) | (mb != m_first)
             nl = (nq + LANES - 1) // LANES * LANES
-            for t in range(nq, nl):  # padding lanes: benign
-                tu = np.uint64(t)
-                W[OV_AT + tu] = 1.0
-                W[VIX_AT + tu] = 0.0
-                W[VIY_AT + tu] = 0.0
-                W[VIZ_AT + tu] = 0.0
-                W[WIX_AT + tu] = 0.0
-                W[WIY_AT + tu] = 0.0
-                W[WIZ_AT + tu] = 0.0
-                W[VJX_AT + tu] = 0.0
-                W[VJY_AT + tu] = 0.0
-                W[VJZ_AT + tu] = 0.0
-                W[WJX_AT + tu] = 0.0
-                W[WJY_AT + tu] = 0.0
-                W[WJZ_AT + tu] = 0.0
-                W[H0_AT + tu] = 0.0
-                W[H1_AT + tu] = 0.0
-                W[H2_AT + tu] = 0.0
-                W[MA_AT + tu] = m_first
-                W[MB_AT + tu] = m_first
+            for t in range(nq, nl):  # padding lanes: as a plane's slot
+                W[MA_AT + np.uint64(t)] = m_first
+                W[MB_AT + np.uint64(t)] = m_first
             # the law's columns: each lane's material pair, or one fill for blocks of one material (kept while
             # the blocks that follow are of it too)
             if mixed:
@@ -849,20 +802,26 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             else:
                 qm[t] = mi * mj / (mi + mj)
             qr[t] = ri * rj / rs
-        # stage 3: the law and the sums, in pair order
+        # stage 3: the law (scalar path) and the sums, in pair order
         for t in range(nq):
             if vec and qd2[t] >= 0.0:  # a sphere pair's lane (its rows and index kept by stage 2)
                 tu = np.uint64(t)
                 k = np.uint64(qk[tu])
                 i = qi[tu]
                 ju = qj[tu]
+                j = np.int64(ju)
                 overlap = W[OV_AT + tu]
                 if overlap > max_overlap_ratio * min(W[RI_AT + tu], W[RJ_AT + tu]):
                     status = BLOWUP_OVERLAP
                 hist[k, 0] = W[NH0_AT + tu]
                 hist[k, 1] = W[NH1_AT + tu]
                 hist[k, 2] = W[NH2_AT + tu]
-                diss += W[DISS_AT + tu]
+                Fn = W[FN_AT + tu]
+                Tx = W[TX_AT + tu]
+                Ty = W[TY_AT + tu]
+                Tz = W[TZ_AT + tu]
+                sliding = W[SLIDE_AT + tu] != 0.0
+                dissipated = W[DISS_AT + tu]
                 ai = W[AI_AT + tu]
                 aj = W[AJ_AT + tu]
                 fx = W[FX_AT + tu]
@@ -871,114 +830,95 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 cx = W[CX_AT + tu]
                 cy = W[CY_AT + tu]
                 cz = W[CZ_AT + tu]
-                FM[i, 0] += fx
-                FM[i, 1] += fy
-                FM[i, 2] += fz
-                FM[i, 3] += ai * cx
-                FM[i, 4] += ai * cy
-                FM[i, 5] += ai * cz
-                FM[ju, 0] -= fx
-                FM[ju, 1] -= fy
-                FM[ju, 2] -= fz
-                FM[ju, 3] += aj * cx
-                FM[ju, 4] += aj * cy
-                FM[ju, 5] += aj * cz
-                pairs.ovl[k] = overlap
-                pairs.fn[k] = W[FN_AT + tu]
-                pairs.ft[k, 0] = W[TX_AT + tu]
-                pairs.ft[k, 1] = W[TY_AT + tu]
-                pairs.ft[k, 2] = W[TZ_AT + tu]
-                pairs.slide[k] = 1 if W[SLIDE_AT + tu] != 0.0 else 0
-                if recording:
-                    ma = np.uint64(np.int64(P[i, 11]))
-                    mb = np.uint64(np.int64(P[ju, 11]))
-                    energy = lane_energy(law, energy, hist, k, ma, mb, W[RSTAR_AT + tu], overlap)
-                continue
-            k = np.uint64(qk[t])
-            i = np.uint64(pairs.i[k])
-            j = pairs.j[k]
-            ju = np.uint64(j)  # the other sphere's row (j < n)
-            ri = P[i, 9]
-            if j >= n + nw:  # a triangle
-                q += 1
-                w = tris.wall[j - n - nw]
-                dx = tcp[q, 0] - P[i, 0]
-                dy = tcp[q, 1] - P[i, 1]
-                dz = tcp[q, 2] - P[i, 2]
-                dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-                overlap = ri - dist
-                if not tact[q] or dist == 0.0:
-                    _apart(pairs, k, min(overlap, 0.0))
-                    continue
-                nx = dx / dist
-                ny = dy / dist
-                nz = dz / dist
-                ai = ri - 0.5 * overlap
-                aj = 0.0
-                vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
-                vjx = planes.vel[w, 0]
-                vjy = planes.vel[w, 1]
-                vjz = planes.vel[w, 2]
-                meff = P[i, 10]
-                rstar = ri
-                mb = np.uint64(planes.mat[w])
-                rmin = ri
-                if not turns:
-                    rotate_history(hist, k, nx, ny, nz)
-            elif j < n:
-                nx = qx[t]
-                ny = qy[t]
-                nz = qz[t]
-                overlap = qd2[t]
-                rj = P[ju, 9]
-                ai = ri - 0.5 * overlap
-                aj = rj - 0.5 * overlap
-                # contact-point velocities: v + ω × arm (arm_i = ai n, arm_j = -aj n)
-                vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
-                vjx, vjy, vjz = _point_velocity(P, ju, -aj, nx, ny, nz)
-                meff = qm[t]
-                rstar = qr[t]
-                mb = np.uint64(np.int64(P[ju, 11]))
-                rmin = min(ri, rj)
+                rstar = W[RSTAR_AT + tu]
+                ma = np.uint64(np.int64(P[i, 11])) if recording else np.uint64(0)  # (for the elastic energy)
+                mb = np.uint64(np.int64(P[ju, 11])) if recording else np.uint64(0)
             else:
-                p = j - n
-                nx = -planes.normal[p, 0]
-                ny = -planes.normal[p, 1]
-                nz = -planes.normal[p, 2]
-                h = -((P[i, 0] - planes.point[p, 0]) * nx + (P[i, 1] - planes.point[p, 1]) * ny
-                      + (P[i, 2] - planes.point[p, 2]) * nz)
-                overlap = ri - h
-                if overlap <= 0.0:
-                    _apart(pairs, k, overlap)
-                    continue
-                ai = ri - 0.5 * overlap
-                aj = 0.0
-                vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
-                vjx = planes.vel[p, 0]
-                vjy = planes.vel[p, 1]
-                vjz = planes.vel[p, 2]
-                meff = P[i, 10]
-                rstar = ri
-                mb = np.uint64(planes.mat[p])
-                rmin = ri
-                if not turns:
-                    rotate_history(hist, k, nx, ny, nz)
-            if overlap > max_overlap_ratio * rmin:
-                status = BLOWUP_OVERLAP
-            vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
-            ma = np.uint64(np.int64(P[i, 11]))  # unsigned: the law's tables are read without a wrap-around test
-            Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row = law_force3(law, hist, k, ma, mb, meff, rstar, overlap,
-                                                                         vn, vtx, vty, vtz, nx, ny, nz, dt)
-            for c in range(n_row):
-                hist[k, c] = row[c]
+                k = np.uint64(qk[t])
+                i = np.uint64(pairs.i[k])
+                j = pairs.j[k]
+                ju = np.uint64(j)  # the other sphere's row (j < n)
+                ri = P[i, 9]
+                if j >= n + nw:  # a triangle
+                    q += 1
+                    w = tris.wall[j - n - nw]
+                    dx = tcp[q, 0] - P[i, 0]
+                    dy = tcp[q, 1] - P[i, 1]
+                    dz = tcp[q, 2] - P[i, 2]
+                    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+                    overlap = ri - dist
+                    if not tact[q] or dist == 0.0:
+                        _apart(pairs, k, min(overlap, 0.0))
+                        continue
+                    nx = dx / dist
+                    ny = dy / dist
+                    nz = dz / dist
+                    ai = ri - 0.5 * overlap
+                    aj = 0.0
+                    vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
+                    vjx = planes.vel[w, 0]
+                    vjy = planes.vel[w, 1]
+                    vjz = planes.vel[w, 2]
+                    meff = P[i, 10]
+                    rstar = ri
+                    mb = np.uint64(planes.mat[w])
+                    rmin = ri
+                    if not turns:
+                        rotate_history(hist, k, nx, ny, nz)
+                elif j < n:
+                    nx = qx[t]
+                    ny = qy[t]
+                    nz = qz[t]
+                    overlap = qd2[t]
+                    rj = P[ju, 9]
+                    ai = ri - 0.5 * overlap
+                    aj = rj - 0.5 * overlap
+                    # contact-point velocities: v + ω × arm (arm_i = ai n, arm_j = -aj n)
+                    vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
+                    vjx, vjy, vjz = _point_velocity(P, ju, -aj, nx, ny, nz)
+                    meff = qm[t]
+                    rstar = qr[t]
+                    mb = np.uint64(np.int64(P[ju, 11]))
+                    rmin = min(ri, rj)
+                else:
+                    p = j - n
+                    nx = -planes.normal[p, 0]
+                    ny = -planes.normal[p, 1]
+                    nz = -planes.normal[p, 2]
+                    h = -((P[i, 0] - planes.point[p, 0]) * nx + (P[i, 1] - planes.point[p, 1]) * ny
+                          + (P[i, 2] - planes.point[p, 2]) * nz)
+                    overlap = ri - h
+                    if overlap <= 0.0:
+                        _apart(pairs, k, overlap)
+                        continue
+                    ai = ri - 0.5 * overlap
+                    aj = 0.0
+                    vix, viy, viz = _point_velocity(P, i, ai, nx, ny, nz)
+                    vjx = planes.vel[p, 0]
+                    vjy = planes.vel[p, 1]
+                    vjz = planes.vel[p, 2]
+                    meff = P[i, 10]
+                    rstar = ri
+                    mb = np.uint64(planes.mat[p])
+                    rmin = ri
+                    if not turns:
+                        rotate_history(hist, k, nx, ny, nz)
+                if overlap > max_overlap_ratio * rmin:
+                    status = BLOWUP_OVERLAP
+                vn, vtx, vty, vtz = relative_velocity(vix - vjx, viy - vjy, viz - vjz, nx, ny, nz)
+                ma = np.uint64(np.int64(P[i, 11]))  # unsigned: the law's tables are read without a wrap-around test
+                Fn, Tx, Ty, Tz, sliding, dissipated, row, n_row = law_force3(law, hist, k, ma, mb, meff, rstar, overlap,
+                                                                             vn, vtx, vty, vtz, nx, ny, nz, dt)
+                for c in range(n_row):
+                    hist[k, c] = row[c]
+                fx = -Fn * nx + Tx
+                fy = -Fn * ny + Ty
+                fz = -Fn * nz + Tz
+                # moment arm × T: (a n) × T
+                cx = ny * Tz - nz * Ty
+                cy = nz * Tx - nx * Tz
+                cz = nx * Ty - ny * Tx
             diss += dissipated
-            fx = -Fn * nx + Tx
-            fy = -Fn * ny + Ty
-            fz = -Fn * nz + Tz
-            # moment arm × T: (a n) × T
-            cx = ny * Tz - nz * Ty
-            cy = nz * Tx - nx * Tz
-            cz = nx * Ty - ny * Tx
             FM[i, 0] += fx
             FM[i, 1] += fy
             FM[i, 2] += fz

@@ -31,13 +31,13 @@ import numpy as np
 from numba.extending import overload
 
 from ..jit import njit, njit_inline
-from ..laws.hertz_mindlin import (CAP_TOTAL, HERTZ_PARAMS_TYPES, HertzParams, ROTATION_PROJECT, SHEAR_TOTAL,
-                                  TANGENTIAL_MINDLIN)
-from ..laws.base import is_params_of, law_energy3
+from ..laws.hertz_mindlin import (HERTZ_PARAMS_TYPES, ROTATION_PROJECT, ROTATION_RESCALE, SHEAR_INCREMENTAL,
+                                  SHEAR_TOTAL, TANGENTIAL_MINDLIN, TANGENTIAL_NONE, HertzParams, hertz_contact3)
+from ..laws.base import is_params_of
 
 BLOCK = 256  # the pair pass's block (demflow.contacts.spheres.BLOCK): at most BLOCK queued pairs
 COL = BLOCK + 8  # a column's length: columns not 4096 bytes apart
-LANES = 8  # the loop's trip count is rounded up to a multiple of this (padding lanes: a benign contact)
+LANES = 8  # the loop's trip count is rounded up to a multiple of this (padding lanes keep earlier lanes' numbers)
 
 # input columns: the normal, overlap, effective mass and radius, radii, both spheres' velocity and spin,
 # the history row (before its turn into the new tangent plane), the law's five numbers and its tangential model
@@ -76,9 +76,10 @@ def _hertz_blocks(law):
 
 
 def work_array(law):
-    """The pass's work array (N_COLUMNS columns of COL), its lanes benign: every column 1.0 but the history and the
-    velocities (0.0) and the normal ((1, 0, 0)).  Compiled per law (overload): an empty array for a law that has no
-    vector path."""
+    """The pass's work array (N_COLUMNS columns of COL), its lanes a contact of finite numbers before any is written
+    (every column 1.0 but the history and the velocities, 0.0, and the normal, (1, 0, 0)): a lane the pass does not
+    write (a plane's or triangle's slot, or padding) keeps earlier numbers, is computed and never read.  Compiled per
+    law (overload): an empty array for a law that has no vector path."""
     raise NotImplementedError
 
 
@@ -91,13 +92,6 @@ def law_fill(law, W, m):
 def law_columns(law, W, nl):
     """Lanes 0..nl-1's law columns from their material pair (columns MA, MB: the material indices as the packed
     rows hold them).  Compiled per law (overload)."""
-    raise NotImplementedError
-
-
-def lane_energy(law, e, hist, k, ma, mb, rstar, overlap):
-    """e plus the elastic energy of a lane's contact k (:func:`demflow.laws.base.law_energy3` for the Hertz-Mindlin
-    law; e itself for a law without lanes, a branch never taken).  Compiled per law (overload): the linear law's
-    energy inlined a second time into the pass set off Numba's internal check (NumbaIRAssumptionWarning)."""
     raise NotImplementedError
 
 
@@ -160,18 +154,6 @@ def _law_columns(law, W, nl):
     return impl
 
 
-@overload(lane_energy, inline="always")
-def _lane_energy(law, e, hist, k, ma, mb, rstar, overlap):
-    if not any(is_params_of(law, cls) for cls in HERTZ_PARAMS_TYPES):
-        def impl(law, e, hist, k, ma, mb, rstar, overlap):
-            return e
-        return impl
-
-    def impl(law, e, hist, k, ma, mb, rstar, overlap):
-        return law_energy3(law, e, hist, k, ma, mb, rstar, overlap)
-    return impl
-
-
 @overload(law_block3, inline="always")
 def _law_block3(law, W, nl, dt):
     if not any(is_params_of(law, cls) for cls in HERTZ_PARAMS_TYPES):
@@ -185,8 +167,9 @@ def _law_block3(law, W, nl, dt):
 
 
 @njit_inline
-def _lanes(W, nl, dt, shear_total, project, cap_total):
-    """The loop of :func:`hertz_block`; ``shear_total`` and ``project`` are constants where it is inlined."""
+def _lanes(W, nl, dt, shear_spring, rotation, cap):
+    """The loop of :func:`hertz_block`; ``shear_spring`` and ``rotation`` are constants where it is inlined."""
+    project = rotation == ROTATION_PROJECT
     C = COL
     for q in range(nl):
         nx = W[NX * C + q]
@@ -237,73 +220,12 @@ def _lanes(W, nl, dt, shear_total, project, cap_total):
         vtx = rvx - vn * nx
         vty = rvy - vn * ny
         vtz = rvz - vn * nz
-        # hertz_contact3, tangential 'mindlin'
-        a = math.sqrt(rstar * overlap)
-        kn = 2.0 * E * a
-        Fe = 4.0 / 3.0 * E * a * overlap
-        Fd = Fe + 2.0 * zn * math.sqrt(meff * kn) * vn
-        Fn = Fd if zn > 0.0 else Fe
-        Fn = 0.0 if Fn < 0.0 else Fn
-        diss = (Fn - Fe) * vn * dt
-        diss_normal = diss
-        r0 = h0
-        r1 = h1
-        r2 = h2
-        kt = 8.0 * G * a
-        if shear_total:
-            h0 += vtx * dt
-            h1 += vty * dt
-            h2 += vtz * dt
-            if project:
-                c = h0 * nx + h1 * ny + h2 * nz
-                h0, h1, h2 = h0 - c * nx, h1 - c * ny, h2 - c * nz
-            Tx = -kt * h0
-            Ty = -kt * h1
-            Tz = -kt * h2
-        else:
-            Tx = h0 - kt * vtx * dt
-            Ty = h1 - kt * vty * dt
-            Tz = h2 - kt * vtz * dt
-            if project:
-                c = Tx * nx + Ty * ny + Tz * nz
-                Tx, Ty, Tz = Tx - c * nx, Ty - c * ny, Tz - c * nz
-        Tcap = mu * (Fn if cap_total else Fe)
-        Tm2 = Tx * Tx + Ty * Ty + Tz * Tz
-        sliding = Tm2 > Tcap * Tcap
-        # sliding: the force scaled back to the cap, the spring beyond it dissipated
-        Tm = math.sqrt(Tm2)
-        s = Tcap / Tm
-        diss_slip = diss + Tcap * (Tm - Tcap) / kt
-        Sx = Tx * s
-        Sy = Ty * s
-        Sz = Tz * s
-        # sticking: the tangential dashpot
-        ct = 2.0 * zt * math.sqrt(meff * kt)
-        diss_stick = diss + ct * (vtx * vtx + vty * vty + vtz * vtz) * dt if zt > 0.0 else diss
-        Dx = Tx - ct * vtx if zt > 0.0 else Tx
-        Dy = Ty - ct * vty if zt > 0.0 else Ty
-        Dz = Tz - ct * vtz if zt > 0.0 else Tz
-        if shear_total:
-            g0 = h0 * s if sliding else h0
-            g1 = h1 * s if sliding else h1
-            g2 = h2 * s if sliding else h2
-        else:
-            g0 = Sx if sliding else Tx
-            g1 = Sy if sliding else Ty
-            g2 = Sz if sliding else Tz
-        Tx = Sx if sliding else Dx
-        Ty = Sy if sliding else Dy
-        Tz = Sz if sliding else Dz
-        diss = diss_slip if sliding else diss_stick
-        # tangential model 'none': no tangential force, the history as the pass turned it
-        sliding = sliding and mindlin
-        diss = diss if mindlin else diss_normal
-        Tx = Tx if mindlin else 0.0
-        Ty = Ty if mindlin else 0.0
-        Tz = Tz if mindlin else 0.0
-        g0 = g0 if mindlin else r0
-        g1 = g1 if mindlin else r1
-        g2 = g2 if mindlin else r2
+        # the law itself, inlined: its branches become the loop's choices (Mindlin-Deresiewicz compiled out)
+        mode = TANGENTIAL_MINDLIN if mindlin else TANGENTIAL_NONE
+        Fn, Tx, Ty, Tz, sliding, diss, row = hertz_contact3(
+            E, G, mu, zn, zt, mode, shear_spring, cap, rotation, (h0, h1, h2, 0.0, 0.0, 0.0, 0.0, 0.0), meff, rstar,
+            overlap, vn, vtx, vty, vtz, nx, ny, nz, dt, False)
+        g0, g1, g2 = row[0], row[1], row[2]
         W[FN * C + q] = Fn
         W[TX * C + q] = Tx
         W[TY * C + q] = Ty
@@ -330,14 +252,13 @@ def hertz_block(W, nl, dt, shear_spring, rotation, cap):
     :func:`demflow.laws.hertz_mindlin.hertz_contact3` with Mindlin's no-slip stiffness; writes the output columns
     FN..CZ.  ``shear_spring``, ``rotation``, ``cap``: the law's scene-wide SHEAR_*, ROTATION_*, CAP_* values (one
     loop compiled per combination of the first two)."""
-    cap_total = cap == CAP_TOTAL
     if shear_spring == SHEAR_TOTAL:
         if rotation == ROTATION_PROJECT:
-            _lanes(W, nl, dt, True, True, cap_total)
+            _lanes(W, nl, dt, SHEAR_TOTAL, ROTATION_PROJECT, cap)
         else:
-            _lanes(W, nl, dt, True, False, cap_total)
+            _lanes(W, nl, dt, SHEAR_TOTAL, ROTATION_RESCALE, cap)
     else:
         if rotation == ROTATION_PROJECT:
-            _lanes(W, nl, dt, False, True, cap_total)
+            _lanes(W, nl, dt, SHEAR_INCREMENTAL, ROTATION_PROJECT, cap)
         else:
-            _lanes(W, nl, dt, False, False, cap_total)
+            _lanes(W, nl, dt, SHEAR_INCREMENTAL, ROTATION_RESCALE, cap)
