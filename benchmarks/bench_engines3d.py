@@ -79,12 +79,18 @@ def demflow_summary(sim):
 
 
 def time_demflow(scene, S, threads, checkpoints=()):
-    """Build, run S steps, then time S more: the same quantity as t(2S) - t(S).  Then, untimed, on to
-    each step of ``checkpoints`` beyond 2S (the other engines' step counts), summarised there."""
+    """Build, run S steps, then time S more: the same quantity as t(2S) - t(S).  Each step of ``checkpoints`` (the
+    other engines' step counts) is summarised on the way: those below S during the first, untimed S steps (run in
+    pieces: the same trajectory), those beyond 2S after the timed run, untimed."""
     set_threads(threads)
     t0 = time.perf_counter()
     sim = build(scene)
-    sim.run(S)
+    more = {}
+    for k in sorted(set(checkpoints)):  # the other engines' step counts below S (YADE's with --yade-steps)
+        if 0 < k < S:
+            sim.run(k - sim.step)
+            more[k] = demflow_summary(sim)
+    sim.run(S - sim.step)
     t_S = time.perf_counter() - t0
     at_S = demflow_summary(sim)
     reb0 = sim.n_rebuilds
@@ -92,7 +98,6 @@ def time_demflow(scene, S, threads, checkpoints=()):
     sim.run(S)
     wall, cpu = time.perf_counter() - t1, time.process_time() - c0
     out = dict(t_S=t_S, rebuilds=sim.n_rebuilds - reb0, at_S=at_S, at_2S=demflow_summary(sim))
-    more = {}
     for k in sorted(set(checkpoints)):
         if k > sim.step:
             sim.run(k - sim.step)
@@ -112,7 +117,8 @@ def load():
     return [round(x, 2) for x in os.getloadavg()]
 
 
-def bench_size(n, S, rounds, timeout, engines, liggghts_factor=1):
+def bench_size(n, S, rounds, timeout, engines, liggghts_factor=1, yade_S=None):
+    """``yade_S``: YADE's S at this size (default S: the same steps as the others)."""
     t0 = time.perf_counter()
     scene = dense_fcc(n, name=f"engines3d{n}")
     sim0 = build(scene)
@@ -125,6 +131,8 @@ def bench_size(n, S, rounds, timeout, engines, liggghts_factor=1):
     makers = {"liggghts": (liggghts_scene(scene), Liggghts3DEngine(benchmark=True)),
               "yade": (scene, Yade3DEngine(benchmark=True))}
     steps = {e: S * (liggghts_factor if e == "liggghts" else 1) for e in engines}
+    if "yade" in steps and yade_S is not None:
+        steps["yade"] = int(yade_S)
     runners = {e: ExternalRunner(e, makers[e][0], steps[e], root, timeout, E=makers[e][1]) for e in makers
                if e in engines}
     info["deck_write_s"] = time.perf_counter() - t0
@@ -181,7 +189,8 @@ def markdown(rows, info):
              "LIGGGHTS one process (data file, primitive floor wall, "
              "no output during the run, shear spring 'total' = its matching mode), " + liggghts_timing_text(rows)
              + "; YADE `-j1` (no PyRunner), t(2S) − t(S) of two processes.", "",
-             "S is the step count of the shorter run (LIGGGHTS's S is given after its rate).", "",
+             "S is the step count of the shorter run (LIGGGHTS's and YADE's S are given after their rates; "
+             "each engine's rate is over its own steps S..2S of the same packing).", "",
              "| N | S | demflow 1 thr | demflow 1 thr, LIGGGHTS's conventions | LIGGGHTS | YADE -j1 | demflow/LIGGGHTS "
              "| demflow/LIGGGHTS, both in LIGGGHTS's conventions | demflow/YADE |",
              "|---|---|---|---|---|---|---|---|---|"]
@@ -191,8 +200,9 @@ def markdown(rows, info):
                           if k in e else "—")
         ratio = lambda a, b: (f"{e[a]['rate_wall'] / e[b]['rate_wall']:.2f}×" if a in e and b in e else "—")  # noqa: E731
         lig = f" S = {e['liggghts']['steps_S']}" if "liggghts" in e else ""
+        yad = f" S = {e['yade']['steps_S']}" if "yade" in e else ""
         lines.append(f"| {row['n']:,} | {row['info']['steps_S']} | {cell('demflow-1')} | {cell(MATCHED)} | "
-                     f"{cell('liggghts')}{lig} | {cell('yade')} | {ratio('demflow-1', 'liggghts')} | "
+                     f"{cell('liggghts')}{lig} | {cell('yade')}{yad} | {ratio('demflow-1', 'liggghts')} | "
                      f"{ratio(MATCHED, 'liggghts')} | {ratio('demflow-1', 'yade')} |")
     if any("demflow-2" in r["engines"] for r in rows):
         lines += ["", "demflow 2 threads: " + ", ".join(
@@ -263,6 +273,11 @@ def main(argv=None):
     p.add_argument("--liggghts-factor", type=int, default=1,
                    help="LIGGGHTS runs factor x S and 2 x factor x S steps (default 1: the same steps, the same "
                         "state of the packing, as the other engines)")
+    p.add_argument("--yade-steps", type=int, nargs="+", default=None,
+                   help="YADE's S per size (default: the others' S).  YADE is 20-25x slower than demflow here, so "
+                        "its S..2S steps take long enough to time at a fraction of the others' S: at 1e5 spheres "
+                        "and S = 400 a round's YADE runs alone took 17 min (2026-12-02), of which ~3 min a process "
+                        "was setup")
     p.add_argument("--engines", nargs="+", default=list(ENGINE_ORDER), choices=ALL_ENGINES)
     p.add_argument("--timeout", type=float, default=900.0, help="per engine subprocess [s]")
     p.add_argument("--yade-max", type=int, default=None,
@@ -284,7 +299,8 @@ def main(argv=None):
     for k, n in enumerate(a.sizes):
         S = a.steps[min(k, len(a.steps) - 1)] if a.steps else max(20, int(round(3e6 / n)))
         engines = [e for e in a.engines if not (e == "yade" and a.yade_max is not None and n > a.yade_max)]
-        rows.append(bench_size(n, S, a.rounds, a.timeout, engines, a.liggghts_factor))
+        yS = a.yade_steps[min(k, len(a.yade_steps) - 1)] if a.yade_steps else None
+        rows.append(bench_size(n, S, a.rounds, a.timeout, engines, a.liggghts_factor, yS))
 
     def _ver(f):
         try:

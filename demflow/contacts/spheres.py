@@ -591,6 +591,17 @@ def rotate_history(hist, k, nx, ny, nz):
 
 
 @njit_inline
+def _effective_mass(mi, mj, fixed_i, fixed_j):
+    """The pair's effective mass m_i m_j / (m_i + m_j), or the free sphere's mass against a fixed one (the packed
+    rows' column 12 non-zero)."""
+    if fixed_j != 0.0:
+        return mi
+    if fixed_i != 0.0:
+        return mj
+    return mi * mj / (mi + mj)
+
+
+@njit_inline
 def _separation(P, pairs, k):
     """Sphere pair k (j < n): d = c_j + shift - c_i, |d|² and R_i + R_j (stage 1 and the pairs apart of
     :func:`sphere_forces`: one expression, so both compute the same bits)."""
@@ -739,15 +750,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 W[NY_AT + tu] = qy[tu] * inv
                 W[NZ_AT + tu] = qz[tu] * inv
                 W[OV_AT + tu] = rs - dist
-                mi = P[i, 10]
-                mj = P[j, 10]
-                if P[j, 12] != 0.0:
-                    meff = mi
-                elif P[i, 12] != 0.0:
-                    meff = mj
-                else:
-                    meff = mi * mj / (mi + mj)
-                W[MEFF_AT + tu] = meff
+                W[MEFF_AT + tu] = _effective_mass(P[i, 10], P[j, 10], P[i, 12], P[j, 12])
                 W[RSTAR_AT + tu] = ri * rj / rs
                 W[RI_AT + tu] = ri
                 W[RJ_AT + tu] = rj
@@ -773,8 +776,8 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
                 law_fill(law, W, m_first)
                 filled = True
             law_block3(law, W, nl, dt)
-        for t in range(nq):
-            if vec or qd2[t] < 0.0:
+        for t in range(nq if not vec else 0):  # the scalar path's stage 2
+            if qd2[t] < 0.0:
                 continue
             k = np.uint64(qk[t])
             i = np.uint64(pairs.i[k])
@@ -793,14 +796,7 @@ def sphere_forces(sp, pairs, planes, tris, law, dt, recording, max_overlap_ratio
             qz[t] = nz
             if not turns:
                 rotate_history(hist, k, nx, ny, nz)
-            mi = P[i, 10]
-            mj = P[j, 10]
-            if P[j, 12] != 0.0:
-                qm[t] = mi
-            elif P[i, 12] != 0.0:
-                qm[t] = mj
-            else:
-                qm[t] = mi * mj / (mi + mj)
+            qm[t] = _effective_mass(P[i, 10], P[j, 10], P[i, 12], P[j, 12])
             qr[t] = ri * rj / rs
         # stage 3: the law (scalar path) and the sums, in pair order
         for t in range(nq):
