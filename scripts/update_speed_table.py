@@ -33,6 +33,7 @@ END = "<!-- /speed-table -->"
 SCALAR_3D = "scalar (a610c0f)"
 LANES_3D = "lanes (5b3544b)"
 LANES_3D_MENDED = "lanes (a69fd2a)"
+LANES_3D_S47 = "lanes (a038eff)"
 RUNS_3D = [
     ("engines3d_speed_session41_zen1", "AMD EPYC Zen 1 (znver1), AVX2", SCALAR_3D),
     ("engines3d_speed_session42_emr", "Intel Xeon Emerald Rapids (emeraldrapids), AVX-512", SCALAR_3D),
@@ -42,6 +43,7 @@ RUNS_3D = [
     ("engines3d_speed_session44_rkl", "Intel Xeon, family 6 model 167 (rocketlake), AVX-512", SCALAR_3D),
     ("engines3d_speed_session46_zen4", "AMD EPYC Zen 4 (znver4), AVX-512", LANES_3D),
     ("engines3d_speed_session46_zen4_second", "AMD EPYC Zen 4 (znver4), AVX-512", LANES_3D_MENDED),
+    ("engines3d_speed_session47_zen4", "AMD EPYC Zen 4 (znver4), AVX-512", LANES_3D_S47),
 ]
 SCALAR_2D = "scalar (a610c0f)"
 BLOCKS_2D = "blocks (4868504)"
