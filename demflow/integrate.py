@@ -150,48 +150,63 @@ def safe_time_step_3d(r: np.ndarray, mass: np.ndarray, mat: np.ndarray, pair_law
 
 
 # Columns of the packed per-disc rows Q (n, 16) the step reads and writes besides P: what the force sums and the
-# update of a disc need, one 64-byte line, then the sums it writes (see :func:`pack_state`).
+# update of a disc need, one 64-byte line, then the sums it writes (see :func:`pack_rows`).
 Q_TH, Q_MASS, Q_INERTIA, Q_C, Q_CR, Q_XREF, Q_YREF, Q_INV_R2, Q_FX, Q_FY, Q_M = range(11)
 Q_WIDTH = 16
 
 
 @njit_parallel
-def pack_state(d, Q):
-    """Fill the rows Q (n, 16) from discs ``d`` (slot order): (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M,
-    0, ...), the columns Q_* of this module.  With P (:func:`demflow.contacts.forces.pack_discs`) they are the
-    state :func:`sum_and_integrate` advances: two rows per disc instead of sixteen arrays."""
-    th, mass, inertia, C, Cr, xref, yref, r, Fx, Fy, M = (d.th, d.mass, d.inertia, d.C, d.Cr, d.xref, d.yref, d.r,
-                                                          d.Fx, d.Fy, d.M)
-    for i in prange(th.shape[0]):
-        Q[i, Q_TH] = th[i]
-        Q[i, Q_MASS] = mass[i]
-        Q[i, Q_INERTIA] = inertia[i]
-        Q[i, Q_C] = C[i]
-        Q[i, Q_CR] = Cr[i]
-        Q[i, Q_XREF] = xref[i]
-        Q[i, Q_YREF] = yref[i]
-        Q[i, Q_INV_R2] = 1.0 / (r[i] * r[i])
-        Q[i, Q_FX] = Fx[i]
-        Q[i, Q_FY] = Fy[i]
-        Q[i, Q_M] = M[i]
+def pack_rows(d, perm, P, Q):
+    """Fill the rows P (n, 8) and Q (n, 16) of the slots from discs ``d`` (disc order), slot p from disc perm[p]:
+    P[p] = (x, y, vx, vy, ω, R, material, 0) (as :func:`demflow.contacts.forces.pack_discs`) and
+    Q[p] = (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M, 0, ...), the columns Q_* of this module: the state
+    :func:`sum_and_integrate` advances, two rows per disc instead of sixteen arrays.  One pass from the public
+    arrays (the discs were gathered into slot-order arrays and packed from them in two passes before session 48:
+    the same numbers, copies and 1/(R·R))."""
+    x, y, vx, vy, om, r, mat = d.x, d.y, d.vx, d.vy, d.om, d.r, d.mat
+    th, mass, inertia, C, Cr, xref, yref, Fx, Fy, M = (d.th, d.mass, d.inertia, d.C, d.Cr, d.xref, d.yref, d.Fx,
+                                                       d.Fy, d.M)
+    for p in prange(perm.shape[0]):
+        i = np.uint64(perm[p])
+        P[p, 0] = x[i]
+        P[p, 1] = y[i]
+        P[p, 2] = vx[i]
+        P[p, 3] = vy[i]
+        P[p, 4] = om[i]
+        P[p, 5] = r[i]
+        P[p, 6] = mat[i]
+        P[p, 7] = 0.0
+        Q[p, Q_TH] = th[i]
+        Q[p, Q_MASS] = mass[i]
+        Q[p, Q_INERTIA] = inertia[i]
+        Q[p, Q_C] = C[i]
+        Q[p, Q_CR] = Cr[i]
+        Q[p, Q_XREF] = xref[i]
+        Q[p, Q_YREF] = yref[i]
+        Q[p, Q_INV_R2] = 1.0 / (r[i] * r[i])
+        Q[p, Q_FX] = Fx[i]
+        Q[p, Q_FY] = Fy[i]
+        Q[p, Q_M] = M[i]
         for c in range(Q_M + 1, Q.shape[1]):
-            Q[i, c] = 0.0
+            Q[p, c] = 0.0
 
 
 @njit_parallel
-def unpack_state(P, Q, x, y, vx, vy, om, th, Fx, Fy, M):
-    """Write the rows P and Q back into the disc arrays (slot order) the step advanced: x, y, v, ω, θ and the
-    force sums of the last step (the arrays are passed one by one: see :mod:`demflow.jit`)."""
-    for i in prange(P.shape[0]):
-        x[i] = P[i, 0]
-        y[i] = P[i, 1]
-        vx[i] = P[i, 2]
-        vy[i] = P[i, 3]
-        om[i] = P[i, 4]
-        th[i] = Q[i, Q_TH]
-        Fx[i] = Q[i, Q_FX]
-        Fy[i] = Q[i, Q_FY]
-        M[i] = Q[i, Q_M]
+def unpack_rows(P, Q, perm, x, y, vx, vy, om, th, Fx, Fy, M):
+    """Write the rows P and Q of the slots back into the disc arrays (disc order; slot p is disc perm[p]) the step
+    advanced: x, y, v, ω, θ and the force sums of the last step (the arrays are passed one by one: see
+    :mod:`demflow.jit`)."""
+    for p in prange(perm.shape[0]):
+        i = np.uint64(perm[p])
+        x[i] = P[p, 0]
+        y[i] = P[p, 1]
+        vx[i] = P[p, 2]
+        vy[i] = P[p, 3]
+        om[i] = P[p, 4]
+        th[i] = Q[p, Q_TH]
+        Fx[i] = Q[p, Q_FX]
+        Fy[i] = Q[p, Q_FY]
+        M[i] = Q[p, Q_M]
 
 
 @njit_parallel
@@ -200,7 +215,7 @@ def sum_and_integrate(Q, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, 
 
     The discs (slot order) are the packed rows P (x, y, vx, vy, ω, R, material, 0;
     :func:`demflow.contacts.forces.pack_discs`) and Q (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M;
-    :func:`pack_state`): per disc two rows, so the pass reads and writes a few cache lines instead of sixteen
+    :func:`pack_rows`): per disc two rows, so the pass reads and writes a few cache lines instead of sixteen
     arrays (benchmarks/results/speed2d_inprocess_ab.md).  Each disc sums its contacts in CSR order, entries
     e = start[i]..start[i+1] naming pair k by sidx[e] = 2k (this disc its finder) or 2k + 1 (its other disc):
     f[k] = (fx, fy, Fs) is pair k's force on its finder and shear force

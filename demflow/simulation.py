@@ -232,7 +232,6 @@ class Simulation:
         self.step = 0
         self.disp_walls = 0.0
         self.rebuilds = 0
-        self._slots = new_discs(n)
         self.layout = Layout(perm=np.arange(n, dtype=np.int64), inv=np.arange(n, dtype=np.int64),
                              P=np.zeros((n, 8)), Q=np.zeros((n, Q_WIDTH)))
         self.records = []
@@ -324,7 +323,7 @@ class Simulation:
         start, sidx = contacts_of_particles_signed(finder, other, self.n)
         wall_pairs = np.flatnonzero(other >= self.n).astype(np.int64)
         inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p = internal_layout(finder, other, self.n, perm, start, sidx,
-                                                                          wall_pairs)
+                                                                          wall_pairs, self.n + self.nw)
         sx_p, sy_p = np.empty_like(sx), np.empty_like(sy)
         sx_p[pos[:sx.shape[0]]] = sx
         sy_p[pos[:sy.shape[0]]] = sy
@@ -415,7 +414,7 @@ class Simulation:
                 if self.has_external_force:
                     before = (self.discs.x.copy(), self.discs.y.copy(), self.discs.th.copy())
                 done, status, self.disp_walls, rec_count = run_steps(
-                    n_run, self.step, self.skin, self.disp_walls, self.discs, self._slots, self.layout,
+                    n_run, self.step, self.skin, self.disp_walls, self.discs, self.layout,
                     self.pairs, self.walls, self.loading, self.law_params, self.box, self.dt, self.gx, self.gy,
                     rec, rec_count, self.external_force, self.has_external_force, self._energy_acc,
                     self._diss_pairs, self._wwork_pairs, self._diss_discs)

@@ -9,7 +9,7 @@ Python objects never enter a kernel: only these tuples of arrays and numbers do.
 
 Structures (2D discs; the disc is its own body, so bodies and particles coincide):
 
-- :class:`Discs`: per disc, in disc order (public) or in slot order (the cycle's internal copy,
+- :class:`Discs`: per disc, in disc order (the cycle's internal copy is in slot order, packed rows,
   discs renumbered in spatial order at every neighbour-list build).
 - :class:`Layout`: the renumbering (perm, inv), the packed rows P the pair kernel reads and the rows
   P and Q the step advances.
@@ -48,7 +48,7 @@ Pairs = namedtuple("Pairs", [
     "hist",              # (m, width) contact history in key order (the law's, e.g. N and S)
     "sx", "sy",          # image shift of the other disc [length], key order (periodic boxes; else empty)
     "pos",               # pair k in key order sits at internal position pos[k] (int64)
-    "fin_p", "oth_p",    # pairs in internal order and slot numbering (int64)
+    "fin_p", "oth_p",    # pairs in internal order and slot numbering (uint32)
     "hist_p",            # history in internal order
     "sx_p", "sy_p",      # image shifts in internal order
     "start_p", "sidx_p",  # CSR contacts of each slot (sidx uint32: 2k as pair k's finder, 2k + 1 as its other)
@@ -110,7 +110,7 @@ def empty_pairs(n_hist: int) -> Pairs:
     i0 = np.empty(0, np.int64)
     f0 = np.empty(0)
     return Pairs(finder=i0, other=i0.copy(), hist=np.zeros((0, n_hist)), sx=f0, sy=f0.copy(),
-                 pos=i0.copy(), fin_p=i0.copy(), oth_p=i0.copy(), hist_p=np.zeros((0, n_hist)),
+                 pos=i0.copy(), fin_p=np.empty(0, np.uint32), oth_p=np.empty(0, np.uint32), hist_p=np.zeros((0, n_hist)),
                  sx_p=f0.copy(), sy_p=f0.copy(), start_p=np.zeros(1, np.int64), sidx_p=np.empty(0, np.uint32),
                  wall_p=i0.copy(), f=np.zeros((0, 3)), out=pair_outputs(0))
 

@@ -5,8 +5,9 @@ Python, and stops early when the neighbour list must be rebuilt or the run blows
 Every array is passed in; nothing is allocated per step.
 
 The steps run on a copy of the state with the discs renumbered in spatial (cell) order,
-made at each neighbour-list build, so that a pair's two discs lie close in memory
-whatever the user's numbering; the public arrays keep the user's numbering.
+made at each neighbour-list build (packed rows, :func:`demflow.integrate.pack_rows`), so that a
+pair's two discs lie close in memory whatever the user's numbering; the public arrays keep the
+user's numbering.
 Per step: the pair forces (one parallel pass over the pair list, writing only what the
 later stages read unless the step records), the wall reactions (over the wall pairs
 only), the records, the wall velocities, then the force sums and the central-difference
@@ -19,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .contacts.forces import pack_discs, wall_sums
+from .contacts.forces import wall_sums
 from .contacts.forces_blocks import step_pair_forces
-from .integrate import Q_INERTIA, Q_MASS, pack_state, sum_and_integrate, unpack_state
+from .integrate import Q_INERTIA, Q_MASS, pack_rows, sum_and_integrate, unpack_rows
 from .jit import njit
 from .laws.base import law_energy_add
 from .walls import move_walls, set_wall_velocities
@@ -121,20 +122,6 @@ def elastic_energy_keys(finder, other, hist, mat, wmat, n, law):
 
 
 @njit
-def _gather(src, dst, perm):
-    """dst[p] = src[perm[p]]: disc order to slot order."""
-    for p in range(perm.shape[0]):
-        dst[p] = src[perm[p]]
-
-
-@njit
-def _scatter(src, dst, perm):
-    """dst[perm[p]] = src[p]: slot order to disc order."""
-    for p in range(perm.shape[0]):
-        dst[perm[p]] = src[p]
-
-
-@njit
 def _rows_to(src, dst, pos):
     """dst[pos[k]] = src[k] for every row k (key order to internal order)."""
     for k in range(pos.shape[0]):
@@ -151,13 +138,13 @@ def _rows_from(src, dst, pos):
 
 
 @njit
-def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
+def run_steps(n, step0, skin, disp_walls, pub, lay, pairs, walls, loading, law, box, dt, gx, gy,
               rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs):
     """Run up to n steps from step ``step0``.
 
-    ``pub`` and ``slots`` (:class:`~demflow.state.Discs`) are the discs in disc order and in slot
-    order (slot p holds disc lay.perm[p], see :func:`demflow.contacts.neighbours.internal_layout`);
-    ``pairs`` (:class:`~demflow.state.Pairs`), ``walls``, ``loading``, ``rec``
+    ``pub`` (:class:`~demflow.state.Discs`) are the discs in disc order; the steps advance the packed rows lay.P
+    and lay.Q of the slots (slot p holds disc lay.perm[p], see
+    :func:`demflow.contacts.neighbours.internal_layout`); ``pairs`` (:class:`~demflow.state.Pairs`), ``walls``, ``loading``, ``rec``
     (:class:`~demflow.state.Records`) as in :mod:`demflow.state`; ``law`` the contact law's
     parameters (its type selects the compiled law, :mod:`demflow.laws.base`); ``box`` the space
     (its type selects the image rule, :mod:`demflow.space`); gravity (gx, gy) [length/time²].
@@ -170,7 +157,8 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
     NaN gravity or external force, or a wall driven to infinity: one O(n) pass per call,
     :func:`state_is_finite`, never per step).
 
-    The state is gathered into the slot arrays on entry and scattered back on return, so the
+    The state is gathered into the slots' rows on entry and scattered back on return
+    (:func:`demflow.integrate.pack_rows`, :func:`demflow.integrate.unpack_rows`), so the
     public discs and pairs.hist are in disc and key order between calls (as are Fx, Fy, M: each
     disc's contact force and moment sums of the last step applied).  Every sum is taken in the
     order of the disc-order reference.
@@ -184,17 +172,10 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
     pair and disc order (``diss_pairs``, ``wwork_pairs`` (pairs, internal order) and ``diss_discs``
     (discs, slot order) are scratch sums, zero on entry and on return).
     """
-    perm = lay.perm
-    for src, dst in ((pub.x, slots.x), (pub.y, slots.y), (pub.th, slots.th), (pub.vx, slots.vx),
-                     (pub.vy, slots.vy), (pub.om, slots.om), (pub.xref, slots.xref), (pub.yref, slots.yref),
-                     (pub.r, slots.r), (pub.mass, slots.mass), (pub.inertia, slots.inertia), (pub.C, slots.C),
-                     (pub.Cr, slots.Cr)):
-        _gather(src, dst, perm)
-    _gather(pub.mat, slots.mat, perm)
     _rows_to(pairs.hist, pairs.hist_p, pairs.pos)
-    done, status, disp_walls, rec_count = _cycle(n, step0, skin, disp_walls, pub.mat, slots, lay, pairs, walls,
-                                                 loading, law, box, dt, gx, gy, rec, rec_count, ext, has_ext, acc,
-                                                 diss_pairs, wwork_pairs, diss_discs)
+    done, status, disp_walls, rec_count = _cycle(n, step0, skin, disp_walls, pub, lay, pairs, walls, loading, law,
+                                                 box, dt, gx, gy, rec, rec_count, ext, has_ext, acc, diss_pairs,
+                                                 wwork_pairs, diss_discs)
     e = 0.0
     ew = 0.0
     for k in range(pairs.pos.shape[0]):  # key order
@@ -209,10 +190,6 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
         e += diss_discs[lay.inv[i]]
     diss_discs[:] = 0.0
     acc[1] += e
-    for src, dst in ((slots.x, pub.x), (slots.y, pub.y), (slots.th, pub.th), (slots.vx, pub.vx),
-                     (slots.vy, pub.vy), (slots.om, pub.om), (slots.Fx, pub.Fx), (slots.Fy, pub.Fy),
-                     (slots.M, pub.M)):
-        _scatter(src, dst, perm)
     _rows_from(pairs.hist_p, pairs.hist, pairs.pos)
     if status != BLOWUP and not state_is_finite(pub, walls, pairs.hist):
         status = NONFINITE
@@ -220,9 +197,9 @@ def run_steps(n, step0, skin, disp_walls, pub, slots, lay, pairs, walls, loading
 
 
 @njit
-def _record(q, step, pairs, walls, slots, lay, mat, law, rec, n_keys):
+def _record(q, step, pairs, walls, lay, mat, law, rec, n_keys):
     """Store recorded step number q (wall forces and points, tracked pairs, energies)."""
-    nd = slots.x.shape[0]
+    nd = lay.P.shape[0]
     nw = walls.px.shape[0]
     rec.step[q] = step
     for w in range(nw):
@@ -244,26 +221,23 @@ def _record(q, step, pairs, walls, slots, lay, mat, law, rec, n_keys):
 
 
 @njit
-def _cycle(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
-           rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs):
-    """The steps of :func:`run_steps` on the slot-ordered state (``mat``: materials in disc order,
-    for the records' key-ordered sums).  The steps advance the packed rows lay.P and lay.Q
-    (:func:`demflow.integrate.sum_and_integrate`), filled from ``slots`` here and written back to it on
-    return."""
-    pack_discs(slots, lay.P)
-    pack_state(slots, lay.Q)
-    out = _steps(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
+def _cycle(n, step0, skin, disp_walls, pub, lay, pairs, walls, loading, law, box, dt, gx, gy, rec, rec_count, ext,
+           has_ext, acc, diss_pairs, wwork_pairs, diss_discs):
+    """The steps of :func:`run_steps` on the slot-ordered state: the packed rows lay.P and lay.Q
+    (:func:`demflow.integrate.sum_and_integrate`), filled from the public discs ``pub`` here (slot p from disc
+    lay.perm[p]) and written back to them on return."""
+    pack_rows(pub, lay.perm, lay.P, lay.Q)
+    out = _steps(n, step0, skin, disp_walls, pub.mat, lay, pairs, walls, loading, law, box, dt, gx, gy,
                  rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs)
-    unpack_state(lay.P, lay.Q, slots.x, slots.y, slots.vx, slots.vy, slots.om, slots.th, slots.Fx, slots.Fy,
-                 slots.M)
+    unpack_rows(lay.P, lay.Q, lay.perm, pub.x, pub.y, pub.vx, pub.vy, pub.om, pub.th, pub.Fx, pub.Fy, pub.M)
     return out
 
 
 @njit
-def _steps(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, law, box, dt, gx, gy,
+def _steps(n, step0, skin, disp_walls, mat, lay, pairs, walls, loading, law, box, dt, gx, gy,
            rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs):
     """The loop of :func:`_cycle` over the steps."""
-    nd = slots.x.shape[0]
+    nd = lay.P.shape[0]
     nw = walls.px.shape[0]
     n_keys = nd + nw
     P = lay.P
@@ -278,7 +252,7 @@ def _steps(n, step0, skin, disp_walls, mat, slots, lay, pairs, walls, loading, l
             return s, BLOWUP, disp_walls, rec_count
         wall_sums(pairs.wall_p, pairs.oth_p, nd, pairs.f, pairs.out, walls)
         if recording:
-            _record(rec_count, step, pairs, walls, slots, lay, mat, law, rec, n_keys)
+            _record(rec_count, step, pairs, walls, lay, mat, law, rec, n_keys)
             rec_count += 1
         set_wall_velocities(step, walls, loading)
         dmax2, jump2 = sum_and_integrate(lay.Q, P, pairs.start_p, pairs.sidx_p, pairs.f, gx, gy, dt, ext,

@@ -327,13 +327,15 @@ def spatial_order(x, y, r, skin):
 
 
 @njit
-def internal_layout(finder, other, n, perm, start, sidx, wall_pairs):
+def internal_layout(finder, other, n, perm, start, sidx, wall_pairs, n_keys):
     """Contact lists renumbered for discs stored in the order ``perm`` (slot p holds disc
     perm[p]), pairs grouped by their finder's slot (keeping the key order within a finder).
 
     Returns (inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p): inv[disc] = slot,
     pos[k] = internal position of listed pair k; fin_p/oth_p the pairs in internal order
-    and numbering (walls keep n + w); (start_p, sidx_p) the per-slot contacts, each
+    and numbering (walls keep n + w; unsigned 32-bit, ``n_keys`` = discs + walls below 2**32: the pair pass
+    streams them every step, and half the bytes took 2 % off the 2D block pass at 1e5 discs and nothing at 1e4,
+    benchmarks/results/speed_experiments_session48.md); (start_p, sidx_p) the per-slot contacts, each
     slot's entries in the order of the disc's own list (start, sidx) so force sums are
     added in the same order, naming internal pairs: 2k' where the slot's disc is internal pair k''s
     finder, 2k' + 1 where it is its other disc (unsigned 32-bit: half the bytes of a signed 64-bit index, and
@@ -349,8 +351,10 @@ def internal_layout(finder, other, n, perm, start, sidx, wall_pairs):
         fcount[finder[k] + 1] += 1
     fstart = np.cumsum(fcount)
     pos = np.empty(m, np.int64)
-    fin_p = np.empty(m, np.int64)
-    oth_p = np.empty(m, np.int64)
+    if n_keys > 0xFFFFFFFF:
+        raise ValueError("more than 2**32 - 1 discs and walls: the internal pair list is 32-bit")
+    fin_p = np.empty(m, np.uint32)
+    oth_p = np.empty(m, np.uint32)
     t = 0
     for p in range(n):
         i = perm[p]
