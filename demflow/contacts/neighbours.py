@@ -143,11 +143,32 @@ def _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, xs, 
     return m
 
 
+@njit
+def _wall_boxes(wall_ax, wall_ay, wall_bx, wall_by, reach):
+    """Each wall segment's bounding box widened by ``reach`` (the largest radius plus the skin) and by a relative
+    1e-9 of its size and coordinates: rows (x0, y0, x1, y1).  A centre outside the box is farther than reach
+    from the segment by more than the rounding of :func:`point_segment_distance`, so that test would reject it
+    too (it is skipped, with its division and square root)."""
+    nw = wall_ax.shape[0]
+    box = np.empty((nw, 4))
+    for w in range(nw):
+        e = reach + 1e-9 * (reach + abs(wall_ax[w]) + abs(wall_ay[w]) + abs(wall_bx[w]) + abs(wall_by[w]))
+        box[w, 0] = min(wall_ax[w], wall_bx[w]) - e
+        box[w, 1] = min(wall_ay[w], wall_by[w]) - e
+        box[w, 2] = max(wall_ax[w], wall_bx[w]) + e
+        box[w, 3] = max(wall_ay[w], wall_by[w]) + e
+    return box
+
+
 @njit_inline
-def _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, out, a, cap, m0):
+def _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, wall_box, n, out, a, cap, m0):
     m = m0
+    xi = x[i]
+    yi = y[i]
     for w in range(wall_ax.shape[0]):
-        qx, qy, d = point_segment_distance(x[i], y[i], wall_ax[w], wall_ay[w], wall_bx[w], wall_by[w])
+        if not (wall_box[w, 0] <= xi <= wall_box[w, 2] and wall_box[w, 1] <= yi <= wall_box[w, 3]):
+            continue  # certainly farther than r + skin (see _wall_boxes)
+        qx, qy, d = point_segment_distance(xi, yi, wall_ax[w], wall_ay[w], wall_bx[w], wall_by[w])
         if d < r[i] + skin:
             if m < cap:
                 out[a + m] = n + w
@@ -195,13 +216,14 @@ def pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by)
     xs, ys, rs = _cell_sorted(x, y, r, order)
     # one scan per disc into a fixed-size scratch row (K partners); discs with more
     # (large discs among small ones) are scanned again straight into the result
+    wall_box = _wall_boxes(wall_ax, wall_ay, wall_bx, wall_by, r.max() + skin)
     K = 8
     scratch = np.empty(n * K, np.int64)
     count = np.zeros(n + 1, np.int64)
     for i in prange(n):
         m = _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, xs, ys, rs,
                              scratch, i * K, K)
-        m = _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, scratch, i * K, K, m)
+        m = _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, wall_box, n, scratch, i * K, K, m)
         count[i + 1] = m
     offs = np.cumsum(count)
     total = offs[n]
@@ -216,7 +238,7 @@ def pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by)
         else:
             m = _disc_candidates(i, x, y, r, skin, xmin, ymin, h, nx, ny, start, order, xs, ys, rs,
                                  other, a, b - a)
-            _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, n, other, a, b - a, m)
+            _wall_candidates(i, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, wall_box, n, other, a, b - a, m)
         _sort_small(other, a, b)
         for k in range(a, b):
             finder[k] = i
