@@ -158,7 +158,7 @@ Q_WIDTH = 16
 @njit_parallel
 def pack_rows(d, perm, P, Q):
     """Fill the rows P (n, 8) and Q (n, 16) of the slots from discs ``d`` (disc order), slot p from disc perm[p]:
-    P[p] = (x, y, vx, vy, ω, R, material, 0) (as :func:`demflow.contacts.forces.pack_discs`) and
+    P[p] = (x, y, vx, vy, ω, R, material, 0), the row :func:`demflow.contacts.forces.pair_forces` reads, and
     Q[p] = (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M, 0, ...), the columns Q_* of this module: the state
     :func:`sum_and_integrate` advances, two rows per disc instead of sixteen arrays.  One pass from the public
     arrays (the discs were gathered into slot-order arrays and packed from them in two passes before session 48:
@@ -214,7 +214,7 @@ def sum_and_integrate(Q, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, 
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
     The discs (slot order) are the packed rows P (x, y, vx, vy, ω, R, material, 0;
-    :func:`demflow.contacts.forces.pack_discs`) and Q (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M;
+    :func:`pack_rows`) and Q (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M;
     :func:`pack_rows`): per disc two rows, so the pass reads and writes a few cache lines instead of sixteen
     arrays (benchmarks/results/speed2d_inprocess_ab.md).  Each disc sums its contacts in CSR order, entries
     e = start[i]..start[i+1] naming pair k by sidx[e] = 2k (this disc its finder) or 2k + 1 (its other disc):

@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 
 from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
-from .contacts.forces import NO_PAIRS, pack_discs, pair_forces
+from .contacts.forces import NO_PAIRS, pair_forces
 from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search_ordered,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
-from .integrate import Q_WIDTH
+from .integrate import Q_WIDTH, pack_rows
 from .jit import check_thread_count
 from .scene import MAX_WHOLE, EnergyBalanceWarning, SceneError, check_whole
 from .space import wrap
@@ -317,6 +317,14 @@ class Simulation:
         self.disp_walls = 0.0
         self.rebuilds += 1
 
+    def _disc_rows(self) -> np.ndarray:
+        """The discs' packed rows P (n, 8) in disc order, for :func:`pair_forces` on the key-order pair list
+        (:func:`demflow.integrate.pack_rows` in the identity order; its Q rows are not kept)."""
+        n = self.n
+        P = np.empty((n, 8))
+        pack_rows(self.discs, np.arange(n, dtype=np.int64), P, np.empty((n, Q_WIDTH)))
+        return P
+
     def _install_pairs(self, finder, other, hist, sx, sy, perm):
         """Make (finder, other) with its history and periodic shifts (key order) the pair list, and ``perm``
         the discs' spatial order, with every array the steps derive from them."""
@@ -480,8 +488,7 @@ class Simulation:
         n = self.n
         pr = self.pairs
         m = pr.finder.shape[0]
-        P = np.zeros((n, 8))
-        pack_discs(d, P)
+        P = self._disc_rows()
         h = pr.hist.copy()
         f = np.zeros((m, 3))  # each pair's force on its finder and its shear force (fx, fy, Fs)
         diss, wwork = np.zeros(m), np.zeros(m)
@@ -628,8 +635,7 @@ class Simulation:
         """
         pr = self.pairs
         m = pr.finder.shape[0]
-        P = np.zeros((self.n, 8))
-        pack_discs(self.discs, P)
+        P = self._disc_rows()
         out = pair_outputs(m)
         pair_forces(pr.finder, pr.other, pr.hist.copy(), pr.sx, pr.sy, P, self.n, self.walls, self.law_params,
                     self.box, self.dt, np.zeros((m, 3)), True, *out, np.inf, np.zeros(m),

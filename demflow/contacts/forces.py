@@ -51,7 +51,7 @@ def pair_forces(fin, oth, hist, sx, sy, P, n, walls, law, box, dt, f, full,
 
     fin, oth: the pairs (other >= n: wall other - n); hist: their history rows; sx, sy: image
     shifts (periodic boxes); P (n, 8): each disc's (x, y, vx, vy, ω, R, material, -) in one 64-byte
-    row, so a pair gathers one cache line per disc (see :func:`pack_discs`).  Writes pair k's
+    row, so a pair gathers one cache line per disc (see :func:`demflow.integrate.pack_rows`).  Writes pair k's
     force on its finder and its shear force, f[k] = (fx, fy, Fs) (the finder's share is (fx, fy, Fs·R_i),
     the other disc's (-fx, -fy, Fs·R_j): :func:`demflow.integrate.sum_and_integrate` forms them); the fields
     of :class:`~demflow.state.PairOutputs`, passed one by one (o_fn, ..., o_cpy; see
@@ -184,18 +184,3 @@ def wall_sums(wall_pairs, oth, n, f, out, walls):
         wf[w, 0] += Fwx
         wf[w, 1] += Fwy
         wf[w, 2] += (out.cpx[k] - walls.px[w]) * Fwy - (out.cpy[k] - walls.py[w]) * Fwx
-
-
-@njit_parallel
-def pack_discs(d, P):
-    """Fill P (n, 8) with rows (x, y, vx, vy, ω, R, material, 0) of discs ``d`` for pair_forces."""
-    x, y, vx, vy, om, r, mat = d.x, d.y, d.vx, d.vy, d.om, d.r, d.mat
-    for i in prange(x.shape[0]):
-        P[i, 0] = x[i]
-        P[i, 1] = y[i]
-        P[i, 2] = vx[i]
-        P[i, 3] = vy[i]
-        P[i, 4] = om[i]
-        P[i, 5] = r[i]
-        P[i, 6] = mat[i]
-        P[i, 7] = 0.0
