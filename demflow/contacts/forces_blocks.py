@@ -10,7 +10,8 @@ sum of each pair.  A block's columns are ``COL`` = BLOCK + 8 numbers long, not 2
 4096 bytes apart made loads wait on unrelated stores (4K aliasing; on that host's 1e4-disc benchmark state the
 padding took the pass from 1.03 of the scalar pass's time to 0.74-0.77, ratio of the minima:
 benchmarks/results/speed_experiments_session45.md).  One material pair in a block (a packing of
-one material) fills the law's six columns once for the block instead of reading each pair's row.
+one material) fills the law's six columns with its row instead of reading each pair's, and once for a chunk of such
+blocks (session 48).
 
 Measured (benchmarks/results/speed2d_session45_blocks_ab.md, in one process against the scalar pass, 20 rounds,
 AMD EPYC Zen 4): the whole 2D step 0.885 of its time at 1e4 discs (per-round median; ratio of the minima 0.896);
@@ -133,6 +134,9 @@ def linear_pair_forces(fin, oth, hist, sx, sy, P, n, law, box, dt, f, max_overla
         O = np.empty(N_OUT * C)
         mats = np.empty(2 * B, np.uint64)  # the block's material pairs (ma, mb), gathered with the geometry
         cbad = 0
+        # the material whose law row the six columns of W hold for every lane (-1: none); a packing of one material
+        # fills them once per chunk: 0.95 / 0.96 of the pass at 1e5 discs, 0.97 at 1e4 (speed_experiments_session48.md)
+        filled = np.int64(-1)
         for b in range(chunk * CHUNK, min((chunk + 1) * CHUNK, nblocks)):
             k0 = b * B
             nb = min(B, m - k0)
@@ -177,11 +181,14 @@ def linear_pair_forces(fin, oth, hist, sx, sy, P, n, law, box, dt, f, max_overla
                     mb = mats[2 * q + 1]
                     for c in range(6):
                         W[(_KN + c) * C + q] = row[ma, mb, c]
-            else:
+            elif filled != np.int64(m0):  # (columns already holding m0's row are left as they are)
                 for c in range(6):
                     v = row[m0, m0, c]
                     for q in range(B):
                         W[(_KN + c) * C + q] = v
+                filled = np.int64(m0)
+            if mixed:
+                filled = -1
             for q in range(nb, B):  # padding lanes: apart
                 W[_DX * C + q] = 0.0
                 W[_DY * C + q] = 0.0
