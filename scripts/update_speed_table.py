@@ -4,7 +4,8 @@ The table holds every side-by-side run of ``benchmarks/bench_engines.py`` (2D de
 ``benchmarks/bench_engines3d.py`` (3D dense Hertz spheres) made since the pair passes' last change before
 2026-12-02 (a610c0f), one row per run, computed from the run's JSON.  Each table names the pair pass each run
 timed: 2D, the scalar pass of a610c0f or the block pass of session 45 (4868504: demflow/contacts/forces_blocks.py;
-4ee0bc8 with session 48's uint32 pair list and packed rows, d08d51b with its wall boxes);
+4ee0bc8 with session 48's uint32 pair list and packed rows, d08d51b with its wall boxes, e37431e with the law's
+columns filled once per chunk);
 3D, the scalar law stage of a610c0f or the vector lanes of session 46 (5b3544b, and a69fd2a after its review mends:
 demflow/contacts/spheres_blocks.py).
 
@@ -50,6 +51,7 @@ SCALAR_2D = "scalar (a610c0f)"
 BLOCKS_2D = "blocks (4868504)"
 BLOCKS_2D_U32 = "blocks, uint32 list (4ee0bc8)"
 BLOCKS_2D_WALLBOX = "blocks, uint32 list, wall boxes (d08d51b)"
+BLOCKS_2D_LAWONCE = "blocks, uint32 list, wall boxes, law columns once (e37431e)"
 RUNS_2D = [
     ("engines_speed_zen1_session41", "AMD EPYC Zen 1 (znver1), AVX2", SCALAR_2D),
     ("engines_speed_emr_session42", "Intel Xeon Emerald Rapids (emeraldrapids), AVX-512", SCALAR_2D),
@@ -59,6 +61,7 @@ RUNS_2D = [
     ("engines_speed_zen4_session45_second", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D),
     ("engines_speed_zen4_session48", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_U32),
     ("engines_speed_zen4_session48_second", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_WALLBOX),
+    ("engines_speed_zen4_session48_third", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_LAWONCE),
 ]
 
 
