@@ -213,9 +213,8 @@ def unpack_rows(P, Q, perm, x, y, vx, vy, om, th, Fx, Fy, M):
 def sum_and_integrate(Q, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
-    The discs (slot order) are the packed rows P (x, y, vx, vy, ω, R, material, 0;
-    :func:`pack_rows`) and Q (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M;
-    :func:`pack_rows`): per disc two rows, so the pass reads and writes a few cache lines instead of sixteen
+    The discs (slot order) are the packed rows P (x, y, vx, vy, ω, R, material, 0) and
+    Q (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M), both from :func:`pack_rows`: per disc two rows, so the pass reads and writes a few cache lines instead of sixteen
     arrays (benchmarks/results/speed2d_inprocess_ab.md).  Each disc sums its contacts in CSR order, entries
     e = start[i]..start[i+1] naming pair k by sidx[e] = 2k (this disc its finder) or 2k + 1 (its other disc):
     f[k] = (fx, fy, Fs) is pair k's force on its finder and shear force

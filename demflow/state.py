@@ -110,7 +110,8 @@ def empty_pairs(n_hist: int) -> Pairs:
     i0 = np.empty(0, np.int64)
     f0 = np.empty(0)
     return Pairs(finder=i0, other=i0.copy(), hist=np.zeros((0, n_hist)), sx=f0, sy=f0.copy(),
-                 pos=i0.copy(), fin_p=np.empty(0, np.uint32), oth_p=np.empty(0, np.uint32), hist_p=np.zeros((0, n_hist)),
+                 pos=i0.copy(), fin_p=np.empty(0, np.uint32), oth_p=np.empty(0, np.uint32),
+                 hist_p=np.zeros((0, n_hist)),
                  sx_p=f0.copy(), sy_p=f0.copy(), start_p=np.zeros(1, np.int64), sidx_p=np.empty(0, np.uint32),
                  wall_p=i0.copy(), f=np.zeros((0, 3)), out=pair_outputs(0))
 

@@ -144,8 +144,8 @@ def run_steps(n, step0, skin, disp_walls, pub, lay, pairs, walls, loading, law, 
 
     ``pub`` (:class:`~demflow.state.Discs`) are the discs in disc order; the steps advance the packed rows lay.P
     and lay.Q of the slots (slot p holds disc lay.perm[p], see
-    :func:`demflow.contacts.neighbours.internal_layout`); ``pairs`` (:class:`~demflow.state.Pairs`), ``walls``, ``loading``, ``rec``
-    (:class:`~demflow.state.Records`) as in :mod:`demflow.state`; ``law`` the contact law's
+    :func:`demflow.contacts.neighbours.internal_layout`); ``pairs`` (:class:`~demflow.state.Pairs`), ``walls``,
+    ``loading``, ``rec`` (:class:`~demflow.state.Records`) as in :mod:`demflow.state`; ``law`` the contact law's
     parameters (its type selects the compiled law, :mod:`demflow.laws.base`); ``box`` the space
     (its type selects the image rule, :mod:`demflow.space`); gravity (gx, gy) [length/time²].
 
