@@ -16,7 +16,7 @@ import numpy as np
 
 from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.forces import NO_PAIRS, pair_forces
-from .contacts.neighbours import (contacts_of_particles_signed, internal_layout, pairs_cell_search_ordered,
+from .contacts.neighbours import (cell_side, contacts_of_particles_signed, internal_layout, pairs_cell_search_ordered,
                                   spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
 from .integrate import Q_WIDTH, pack_rows
@@ -25,8 +25,8 @@ from .scene import MAX_WHOLE, EnergyBalanceWarning, SceneError, check_whole
 from .space import wrap
 from .state import (Layout, Loading, Pairs, PeriodicBox, Records, Walls, empty_pairs, new_discs,
                     pair_outputs)
-from .stepping import (BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, NONFINITE, REBUILD, elastic_energy_keys, run_steps,
-                       state_is_finite)
+from .stepping import (BLOWUP, MAX_OVERLAP_RATIO, MAX_STEP_RATIO, NONFINITE, REBUILD, elastic_energy_keys,
+                       force_sums_keys, run_steps, state_is_finite)
 from .tolerances import tol
 
 
@@ -258,6 +258,7 @@ class Simulation:
             self._buoyancy = -fluid.rho * area[:, None] * np.array([self.gx, self.gy])[None, :]
             self._next_solve = self.fluid.setup.start
         self._scene_digest = scene_digest(self.fixed_parts())  # as built (demflow.checkpoint_scene)
+        self._cell_side = (None, 0.0)  # (skin, neighbours.cell_side of the radii and that skin)
         self.rebuild()
 
     def _walls_init(self, scene, wall_geo, wall_mat):
@@ -307,7 +308,10 @@ class Simulation:
             finder, other, sx, sy = pairs_periodic(d.x, d.y, d.r, self.skin, ax, ay, bx, by, self.box)
             perm = spatial_order(d.x, d.y, d.r, self.skin)
         else:
-            finder, other, perm = pairs_cell_search_ordered(d.x, d.y, d.r, self.skin, ax, ay, bx, by)
+            if self._cell_side[0] != self.skin:  # the radii are fixed at construction; the side follows the skin
+                self._cell_side = (self.skin, cell_side(d.r, self.skin))
+            finder, other, perm = pairs_cell_search_ordered(d.x, d.y, d.r, self.skin, ax, ay, bx, by,
+                                                            self._cell_side[1])
             sx = sy = np.empty(0)
         old = self.pairs
         hist = transfer_history(old.finder, old.other, old.hist, finder, other, self.n + self.nw)
@@ -496,17 +500,8 @@ class Simulation:
             pair_forces(pr.finder, pr.other, h, pr.sx, pr.sy, P, n, self.walls, self.law_params, self.box, self.dt,
                         f, False, *pair_outputs(m), np.inf, diss, wwork, NO_PAIRS, False)
         # each disc's force and moment sums at step n (as demflow.integrate.sum_and_integrate), then v_{n+1/2}
-        fx, fy, mo = np.zeros(n), np.zeros(n), np.zeros(n)
-        if m:
-            disc = pr.other < n
-            j = pr.other[disc]
-            # each disc's share: (fx, fy, Fs·R) as the finder, (-fx, -fy, Fs·R) as the other disc
-            np.add.at(fx, pr.finder, f[:, 0])
-            np.add.at(fy, pr.finder, f[:, 1])
-            np.add.at(mo, pr.finder, f[:, 2] * d.r[pr.finder])
-            np.add.at(fx, j, -f[disc, 0])
-            np.add.at(fy, j, -f[disc, 1])
-            np.add.at(mo, j, f[disc, 2] * d.r[j])
+        # each disc's share: (fx, fy, Fs·R) as the finder, (-fx, -fy, Fs·R) as the other disc
+        fx, fy, mo = force_sums_keys(pr.finder, pr.other, f, d.r, n)
         if self.has_external_force:
             fx, fy, mo = fx + self.external_force[:, 0], fy + self.external_force[:, 1], mo + self.external_force[:, 2]
         dt = self.dt

@@ -57,13 +57,26 @@ def _finds(i, j, r):
 
 
 @njit
+def cell_side(r, skin):
+    """The cell search's base cell side 2·r_median + skin [length] (before :func:`_grid` widens it for a sparse
+    scene): a function of the radii and the skin only, so a simulation computes it once, not at every
+    neighbour-list build (the median of 1e5 radii took 1.2 ms of a 28 ms build, session 49)."""
+    return 2.0 * np.median(r) + skin
+
+
+@njit
 def _grid(x, y, r, skin):
+    return _grid_of_side(x, y, cell_side(r, skin))
+
+
+@njit
+def _grid_of_side(x, y, h):
+    """The cell grid of the centres x, y with base cell side h (:func:`cell_side`)."""
     n = x.shape[0]
     xmin = x.min()
     ymin = y.min()
     xmax = x.max()
     ymax = y.max()
-    h = 2.0 * np.median(r) + skin
     # cap the grid at ~4 cells per disc (and 1e7 cells) so sparse scenes stay cheap
     while ((xmax - xmin) / h + 1.0) * ((ymax - ymin) / h + 1.0) > max(4.0 * n, 16.0) and h < 1e300:
         h *= 1.5
@@ -200,19 +213,24 @@ def pairs_cell_search(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
     endpoints A and B (arrays, one entry per wall).  Returns (finder, other) int64 arrays
     sorted by key; other >= n_discs denotes wall other - n_discs.
     """
-    finder, other, _ = pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by)
+    if x.shape[0] == 0:
+        empty = np.empty(0, np.int64)
+        return empty.copy(), empty.copy()
+    finder, other, _ = pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by,
+                                                 cell_side(r, skin))
     return finder, other
 
 
 @njit_parallel
-def pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
+def pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by, h0):
     """:func:`pairs_cell_search`'s (finder, other) and the discs in its cell order (:func:`spatial_order` of
-    the same arguments, from the grid the search built: one grid per neighbour-list build)."""
+    the same arguments, from the grid the search built: one grid per neighbour-list build); ``h0`` =
+    :func:`cell_side` (r, skin), which the caller keeps while the radii and the skin stay as they are."""
     n = x.shape[0]
     empty = np.empty(0, np.int64)
     if n == 0:
         return empty.copy(), empty.copy(), empty.copy()
-    xmin, ymin, h, nx, ny, cell, start, order = _grid(x, y, r, skin)
+    xmin, ymin, h, nx, ny, cell, start, order = _grid_of_side(x, y, h0)
     xs, ys, rs = _cell_sorted(x, y, r, order)
     # one scan per disc into a fixed-size scratch row (K partners); discs with more
     # (large discs among small ones) are scanned again straight into the result
