@@ -149,20 +149,25 @@ def safe_time_step_3d(r: np.ndarray, mass: np.ndarray, mat: np.ndarray, pair_law
                           partners=partners)
 
 
-# Columns of the packed per-disc rows Q (n, 16) the step reads and writes besides P: what the force sums and the
-# update of a disc need, one 64-byte line, then the sums it writes (see :func:`pack_rows`).
-Q_TH, Q_MASS, Q_INERTIA, Q_C, Q_CR, Q_XREF, Q_YREF, Q_INV_R2, Q_FX, Q_FY, Q_M = range(11)
-Q_WIDTH = 16
+# The packed per-disc rows of the cycle (see :func:`pack_rows`): P (n, 8) = (x, y, vx, vy, ω, R, material, θ), the
+# row the pair pass gathers and the update writes; Q (n, 8), the columns Q_* below: what the update of a disc reads
+# and never writes, one 64-byte line; F (n, 3) = (F_x, F_y, M), the contact sums it writes.  Before session 49 θ and
+# the sums sat in a 16-column Q (two lines, both written every step): the pass over the discs at 1e5 took 0.96 of
+# its time with this split (speed_experiments_session49.md).
+P_TH = 7
+Q_MASS, Q_INERTIA, Q_C, Q_CR, Q_XREF, Q_YREF, Q_INV_R2 = range(7)
+Q_WIDTH = 8
 
 
 @njit_parallel
-def pack_rows(d, perm, P, Q):
-    """Fill the rows P (n, 8) and Q (n, 16) of the slots from discs ``d`` (disc order), slot p from disc perm[p]:
-    P[p] = (x, y, vx, vy, ω, R, material, 0), the row :func:`demflow.contacts.forces.pair_forces` reads, and
-    Q[p] = (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M, 0, ...), the columns Q_* of this module: the state
-    :func:`sum_and_integrate` advances, two rows per disc instead of sixteen arrays.  One pass from the public
-    arrays (the discs were gathered into slot-order arrays and packed from them in two passes before session 48:
-    the same numbers, copies and 1/(R·R))."""
+def pack_rows(d, perm, P, Q, F):
+    """Fill the rows P (n, 8), Q (n, 8) and F (n, 3) of the slots from discs ``d`` (disc order), slot p from disc
+    perm[p]: P[p] = (x, y, vx, vy, ω, R, material, θ), the row :func:`demflow.contacts.forces.pair_forces` reads
+    (θ in its spare column, which the pair pass does not read), Q[p] = (m, I, C, C*, x_ref, y_ref, 1/R², 0), the
+    columns Q_* of this module, and F[p] = (F_x, F_y, M): the state :func:`sum_and_integrate` advances, three
+    rows per disc instead of sixteen arrays.  One pass from the public arrays (the discs were gathered into
+    slot-order arrays and packed from them in two passes before session 48: the same numbers, copies and
+    1/(R·R))."""
     x, y, vx, vy, om, r, mat = d.x, d.y, d.vx, d.vy, d.om, d.r, d.mat
     th, mass, inertia, C, Cr, xref, yref, Fx, Fy, M = (d.th, d.mass, d.inertia, d.C, d.Cr, d.xref, d.yref, d.Fx,
                                                        d.Fy, d.M)
@@ -175,8 +180,7 @@ def pack_rows(d, perm, P, Q):
         P[p, 4] = om[i]
         P[p, 5] = r[i]
         P[p, 6] = mat[i]
-        P[p, 7] = 0.0
-        Q[p, Q_TH] = th[i]
+        P[p, P_TH] = th[i]
         Q[p, Q_MASS] = mass[i]
         Q[p, Q_INERTIA] = inertia[i]
         Q[p, Q_C] = C[i]
@@ -184,16 +188,15 @@ def pack_rows(d, perm, P, Q):
         Q[p, Q_XREF] = xref[i]
         Q[p, Q_YREF] = yref[i]
         Q[p, Q_INV_R2] = 1.0 / (r[i] * r[i])
-        Q[p, Q_FX] = Fx[i]
-        Q[p, Q_FY] = Fy[i]
-        Q[p, Q_M] = M[i]
-        for c in range(Q_M + 1, Q.shape[1]):
-            Q[p, c] = 0.0
+        Q[p, 7] = 0.0
+        F[p, 0] = Fx[i]
+        F[p, 1] = Fy[i]
+        F[p, 2] = M[i]
 
 
 @njit_parallel
-def unpack_rows(P, Q, perm, x, y, vx, vy, om, th, Fx, Fy, M):
-    """Write the rows P and Q of the slots back into the disc arrays (disc order; slot p is disc perm[p]) the step
+def unpack_rows(P, F, perm, x, y, vx, vy, om, th, Fx, Fy, M):
+    """Write the rows P and F of the slots back into the disc arrays (disc order; slot p is disc perm[p]) the step
     advanced: x, y, v, ω, θ and the force sums of the last step (the arrays are passed one by one: see
     :mod:`demflow.jit`)."""
     for p in prange(perm.shape[0]):
@@ -203,25 +206,27 @@ def unpack_rows(P, Q, perm, x, y, vx, vy, om, th, Fx, Fy, M):
         vx[i] = P[p, 2]
         vy[i] = P[p, 3]
         om[i] = P[p, 4]
-        th[i] = Q[p, Q_TH]
-        Fx[i] = Q[p, Q_FX]
-        Fy[i] = Q[p, Q_FY]
-        M[i] = Q[p, Q_M]
+        th[i] = P[p, P_TH]
+        Fx[i] = F[p, 0]
+        Fy[i] = F[p, 1]
+        M[i] = F[p, 2]
 
 
 @njit_parallel
-def sum_and_integrate(Q, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
+def sum_and_integrate(Q, P, F, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, diss):
     """Sum each disc's contact forces and advance it, in one pass (no conflicts, fixed order).
 
-    The discs (slot order) are the packed rows P (x, y, vx, vy, ω, R, material, 0) and
-    Q (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M), both from :func:`pack_rows`: per disc two rows, so the pass reads and writes a few cache lines instead of sixteen
+    The discs (slot order) are the packed rows P (x, y, vx, vy, ω, R, material, θ), Q (m, I, C, C*, x_ref, y_ref,
+    1/R², 0) and F (F_x, F_y, M), all from :func:`pack_rows`: per disc three rows, so the pass reads and writes a few
+    cache lines instead of sixteen
     arrays (benchmarks/results/speed2d_inprocess_ab.md).  Each disc sums its contacts in CSR order, entries
     e = start[i]..start[i+1] naming pair k by sidx[e] = 2k (this disc its finder) or 2k + 1 (its other disc):
     f[k] = (fx, fy, Fs) is pair k's force on its finder and shear force
     (:func:`demflow.contacts.forces.pair_forces`), and the disc's share is (fx, fy, Fs·R) as the finder and
     (-fx, -fy, Fs·R) as the other disc, R its own radius (the numbers the per-entry rows of 0ee02e7 held, so
     the same sums to the bit; a pair's force is written once and read twice instead of written twice).  The update is thesis
-    eqs 2.27-2.30 (see the module docstring); the new x, y, v, ω go to P, θ and the contact sums to Q.
+    eqs 2.27-2.30 (see the module docstring); the new x, y, v, ω and θ go to P, the contact sums to F (Q is only
+    read).
     With ``has_ext`` the external force and moment ``ext[ext_perm[i]]`` = (fx, fy, m) (the fluid force,
     moment and buoyancy of a saturated scene, thesis §3.4 and eq 4.39, in disc order, ``ext_perm`` mapping
     slot to disc) is added to disc i's sums; without it ``ext`` is not read.  Returns the largest squared
@@ -247,9 +252,9 @@ def sum_and_integrate(Q, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, 
             sx += s * f[k, 0]
             sy += s * f[k, 1]
             sm += f[k, 2] * ri
-        Q[i, Q_FX] = sx
-        Q[i, Q_FY] = sy
-        Q[i, Q_M] = sm
+        F[i, 0] = sx
+        F[i, 1] = sy
+        F[i, 2] = sm
         if has_ext:
             q = ext_perm[i]
             sx += ext[q, 0]
@@ -280,7 +285,7 @@ def sum_and_integrate(Q, P, start, sidx, f, gx, gy, dt, ext, ext_perm, has_ext, 
             diss[i] += (Ci * (mvx * mvx + mvy * mvy) + Cri * mom * mom) * dt
         xi = P[i, 0] + vxi * dt
         yi = P[i, 1] + vyi * dt
-        Q[i, Q_TH] += omi * dt
+        P[i, P_TH] += omi * dt
         P[i, 0] = xi
         P[i, 1] = yi
         P[i, 2] = vxi

@@ -233,7 +233,7 @@ class Simulation:
         self.disp_walls = 0.0
         self.rebuilds = 0
         self.layout = Layout(perm=np.arange(n, dtype=np.int64), inv=np.arange(n, dtype=np.int64),
-                             P=np.zeros((n, 8)), Q=np.zeros((n, Q_WIDTH)))
+                             P=np.zeros((n, 8)), Q=np.zeros((n, Q_WIDTH)), F=np.zeros((n, 3)))
         self.records = []
         self.snapshots = []
         # energy accounts of the running chunk (stepping.run_steps) and the last chunk's balance
@@ -323,10 +323,10 @@ class Simulation:
 
     def _disc_rows(self) -> np.ndarray:
         """The discs' packed rows P (n, 8) in disc order, for :func:`pair_forces` on the key-order pair list
-        (:func:`demflow.integrate.pack_rows` in the identity order; its Q rows are not kept)."""
+        (:func:`demflow.integrate.pack_rows` in the identity order; its Q and F rows are not kept)."""
         n = self.n
         P = np.empty((n, 8))
-        pack_rows(self.discs, np.arange(n, dtype=np.int64), P, np.empty((n, Q_WIDTH)))
+        pack_rows(self.discs, np.arange(n, dtype=np.int64), P, np.empty((n, Q_WIDTH)), np.empty((n, 3)))
         return P
 
     def _install_pairs(self, finder, other, hist, sx, sy, perm):

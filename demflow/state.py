@@ -12,7 +12,7 @@ Structures (2D discs; the disc is its own body, so bodies and particles coincide
 - :class:`Discs`: per disc, in disc order (the cycle's internal copy is in slot order, packed rows,
   discs renumbered in spatial order at every neighbour-list build).
 - :class:`Layout`: the renumbering (perm, inv), the packed rows P the pair kernel reads and the rows
-  P and Q the step advances.
+  P, Q and F the step advances.
 - :class:`Pairs`: the neighbour list in key order (public) and in internal order, each pair's
   history, the per-step work arrays and the per-pair image shifts of a periodic box.
 - :class:`Walls`: segment walls (C&S Fig. 4) and their force; :class:`Loading` their phases and
@@ -39,8 +39,9 @@ Discs = namedtuple("Discs", [
 Layout = namedtuple("Layout", [
     "perm",  # slot p holds disc perm[p] (int64)
     "inv",   # disc i sits in slot inv[i] (int64)
-    "P",     # (n, 8) packed rows (x, y, vx, vy, ω, R, material, 0) of the slots
-    "Q",     # (n, 16) packed rows (θ, m, I, C, C*, x_ref, y_ref, 1/R², F_x, F_y, M, 0, ...) (demflow.integrate)
+    "P",     # (n, 8) packed rows (x, y, vx, vy, ω, R, material, θ) of the slots
+    "Q",     # (n, 8) packed rows (m, I, C, C*, x_ref, y_ref, 1/R², 0), read-only in the steps (demflow.integrate)
+    "F",     # (n, 3) packed rows (F_x, F_y, M): the contact sums of the last step
 ])
 
 Pairs = namedtuple("Pairs", [

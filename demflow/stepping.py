@@ -256,10 +256,10 @@ def _cycle(n, step0, skin, disp_walls, pub, lay, pairs, walls, loading, law, box
     """The steps of :func:`run_steps` on the slot-ordered state: the packed rows lay.P and lay.Q
     (:func:`demflow.integrate.sum_and_integrate`), filled from the public discs ``pub`` here (slot p from disc
     lay.perm[p]) and written back to them on return."""
-    pack_rows(pub, lay.perm, lay.P, lay.Q)
+    pack_rows(pub, lay.perm, lay.P, lay.Q, lay.F)
     out = _steps(n, step0, skin, disp_walls, pub.mat, lay, pairs, walls, loading, law, box, dt, gx, gy,
                  rec, rec_count, ext, has_ext, acc, diss_pairs, wwork_pairs, diss_discs)
-    unpack_rows(lay.P, lay.Q, lay.perm, pub.x, pub.y, pub.vx, pub.vy, pub.om, pub.th, pub.Fx, pub.Fy, pub.M)
+    unpack_rows(lay.P, lay.F, lay.perm, pub.x, pub.y, pub.vx, pub.vy, pub.om, pub.th, pub.Fx, pub.Fy, pub.M)
     return out
 
 
@@ -285,7 +285,7 @@ def _steps(n, step0, skin, disp_walls, mat, lay, pairs, walls, loading, law, box
             _record(rec_count, step, pairs, walls, lay, mat, law, rec, n_keys)
             rec_count += 1
         set_wall_velocities(step, walls, loading)
-        dmax2, jump2 = sum_and_integrate(lay.Q, P, pairs.start_p, pairs.sidx_p, pairs.f, gx, gy, dt, ext,
+        dmax2, jump2 = sum_and_integrate(lay.Q, P, lay.F, pairs.start_p, pairs.sidx_p, pairs.f, gx, gy, dt, ext,
                                          lay.perm, has_ext, diss_discs)
         if jump2 > MAX_STEP_RATIO * MAX_STEP_RATIO or not np.isfinite(jump2):
             return s + 1, BLOWUP, disp_walls, rec_count
