@@ -16,8 +16,8 @@ import numpy as np
 
 from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.forces import NO_PAIRS, pair_forces
-from .contacts.neighbours import (cell_side, contacts_of_particles_signed, internal_layout, pairs_cell_search_ordered,
-                                  spatial_order, transfer_history)
+from .contacts.neighbours import (cell_order, cell_side, contacts_of_particles_signed, internal_layout, outer_list_holds,
+                                  pairs_cell_search_ordered, pairs_within, spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
 from .integrate import Q_WIDTH, pack_rows
 from .jit import check_thread_count
@@ -32,6 +32,12 @@ from .tolerances import tol
 
 # A chunk's created energy below this fraction of the energies it moved is round-off (sums of ~1e4 terms).
 ENERGY_ROUND_OFF = 1e-9
+# The wider pair list the neighbour-list builds of a box without periodic axes filter, in skins (see
+# Simulation._pairs_from_outer_list): it holds every pair the cell search would list while the discs moved less than
+# (OUTER_SKIN - 1)/2 skins since its build, so it serves several builds (each after the fastest disc moved skin/2).
+# A speed knob only: the lists, and so the results, are those of the cell search whatever its value
+# (tests/test_properties.py; speed_experiments_session49.md).
+OUTER_SKIN = 4.0
 
 
 class BlowUpError(RuntimeError):
@@ -259,6 +265,9 @@ class Simulation:
             self._next_solve = self.fluid.setup.start
         self._scene_digest = scene_digest(self.fixed_parts())  # as built (demflow.checkpoint_scene)
         self._cell_side = (None, 0.0)  # (skin, neighbours.cell_side of the radii and that skin)
+        self._inner_side = (None, 0.0)  # the same for the list's own skin (the slots' cell order)
+        self._outer = None  # the wider pair list the builds filter (_pairs_from_outer_list)
+        self.outer_builds = 0
         self.rebuild()
 
     def _walls_init(self, scene, wall_geo, wall_mat):
@@ -308,10 +317,7 @@ class Simulation:
             finder, other, sx, sy = pairs_periodic(d.x, d.y, d.r, self.skin, ax, ay, bx, by, self.box)
             perm = spatial_order(d.x, d.y, d.r, self.skin)
         else:
-            if self._cell_side[0] != self.skin:  # the radii are fixed at construction; the side follows the skin
-                self._cell_side = (self.skin, cell_side(d.r, self.skin))
-            finder, other, perm = pairs_cell_search_ordered(d.x, d.y, d.r, self.skin, ax, ay, bx, by,
-                                                            self._cell_side[1])
+            finder, other, perm = self._pairs_from_outer_list(ax, ay, bx, by)
             sx = sy = np.empty(0)
         old = self.pairs
         hist = transfer_history(old.finder, old.other, old.hist, finder, other, self.n + self.nw)
@@ -320,6 +326,35 @@ class Simulation:
         d.yref[:] = d.y
         self.disp_walls = 0.0
         self.rebuilds += 1
+
+    def _pairs_from_outer_list(self, ax, ay, bx, by):
+        """(finder, other, perm) of a neighbour-list build in a box without periodic axes: the pairs with gap below
+        the skin, key order, exactly those of :func:`pairs_cell_search_ordered` with this skin, and a spatial order.
+
+        Taken from a wider list (gap below OUTER_SKIN × skin, built by the cell search) while that list still holds
+        every pair the cell search would list (:func:`outer_list_holds`: the discs and walls moved little enough
+        since its build), by one pass over it (:func:`pairs_within`); otherwise the wider list is built anew first.
+        At 1e5 discs the cell search took 18-20 ms of a 28 ms build and the pass takes about 2 ms; at OUTER_SKIN = 4
+        three wider lists served the 13 builds of 400 steps there (speed_experiments_session49.md).  The wider list
+        costs about 64 bytes a disc there (3 pairs a disc and the centres at its build).  The slots' order is the
+        cell order of this skin's grid, as the cell search gives it (keeping the wider grid's order, which only
+        sets speed, made the steps 6 % slower there).
+        """
+        d = self.discs
+        so = OUTER_SKIN * self.skin
+        o = self._outer
+        if o is None or o["skin"] != self.skin or not outer_list_holds(
+                self.skin, so, d.x, d.y, o["x"], o["y"], ax, ay, bx, by, *o["walls"]):
+            if self._cell_side[0] != so:  # the radii are fixed at construction; the side follows the skin
+                self._cell_side = (so, cell_side(d.r, so))
+            fo, oo, _ = pairs_cell_search_ordered(d.x, d.y, d.r, so, ax, ay, bx, by, self._cell_side[1])
+            o = self._outer = dict(skin=self.skin, finder=fo, other=oo, x=d.x.copy(), y=d.y.copy(),
+                                   walls=(ax.copy(), ay.copy(), bx.copy(), by.copy()))
+            self.outer_builds += 1
+        finder, other = pairs_within(o["finder"], o["other"], d.x, d.y, d.r, self.skin, ax, ay, bx, by)
+        if self._inner_side[0] != self.skin:
+            self._inner_side = (self.skin, cell_side(d.r, self.skin))
+        return finder, other, cell_order(d.x, d.y, self._inner_side[1])
 
     def _disc_rows(self) -> np.ndarray:
         """The discs' packed rows P (n, 8) in disc order, for :func:`pair_forces` on the key-order pair list

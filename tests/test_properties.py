@@ -5,7 +5,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from demflow import build
-from demflow.contacts.neighbours import pairs_brute_force, pairs_cell_search
+from demflow.contacts.neighbours import (outer_list_holds, pairs_brute_force, pairs_cell_search, pairs_within)
 
 from helpers import box_walls, gas_scene, random_packing
 
@@ -34,6 +34,62 @@ def test_cell_search_equals_brute_force(seed, ratio, skin):
     f1, o1 = pairs_cell_search(x, y, r, skin, wx, wy, bx, by)
     f2, o2 = pairs_brute_force(x, y, r, skin, wx, wy, bx, by)
     assert np.array_equal(f1, f2) and np.array_equal(o1, o2)
+
+
+def _moved_scene(seed, ratio, skin):
+    """Discs in a box with two walls, then every disc and the walls' endpoints moved at random."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 300))
+    r = rng.uniform(0.01, 0.01 * ratio, n)
+    x = rng.uniform(0, 2, n)
+    y = rng.uniform(0, 1, n)
+    walls = [np.array([0.0, 2.0]), np.array([0.0, 0.0]), np.array([2.0, 2.0]), np.array([0.0, 1.0])]
+    step = rng.uniform(0.0, 1.5 * skin) + 1e-6
+    ang = rng.uniform(0, 2 * np.pi, n)
+    size = step * rng.uniform(0, 1, n) ** 0.3
+    x1, y1 = x + size * np.cos(ang), y + size * np.sin(ang)
+    moved = [w + rng.uniform(-1, 1, 2) * step * rng.uniform(0, 1) for w in walls]
+    return r, (x, y, walls), (x1, y1, moved)
+
+
+@SETTINGS
+@given(seed=st.integers(0, 10_000), ratio=st.sampled_from([1.0, 3.0, 10.0]), skin=st.floats(0.001, 0.5),
+       mult=st.sampled_from([1.0, 2.0, 3.0, 4.0, 6.0]))
+def test_pairs_from_a_wider_list_equal_the_cell_search(seed, ratio, skin, mult):
+    """A neighbour-list build from a wider list (Simulation._pairs_from_outer_list): where outer_list_holds says the
+    list built at the old positions with skin·mult still holds, filtering it gives the cell search's pairs at the
+    new positions exactly; where it does not, the check refused (never a silent miss)."""
+    r, (x0, y0, w0), (x, y, w) = _moved_scene(seed, ratio, skin)
+    fo, oo = pairs_cell_search(x0, y0, r, skin * mult, *w0)
+    f1, o1 = pairs_cell_search(x, y, r, skin, *w)
+    holds = outer_list_holds(skin, skin * mult, x, y, x0, y0, *w, *w0)
+    f2, o2 = pairs_within(fo, oo, x, y, r, skin, *w)
+    if holds:
+        assert np.array_equal(f1, f2) and np.array_equal(o1, o2)
+    # whatever the check says, the filtered list is a subset of the true one (it never lists a pair too far)
+    key1 = set(zip(f1.tolist(), o1.tolist()))
+    assert set(zip(f2.tolist(), o2.tolist())) <= key1
+
+
+def test_a_wider_list_that_no_longer_holds_is_refused():
+    """The negative control: two discs 3 skins apart at the wider list's build (skin·2: not listed) that then move
+    together.  The check must refuse that list, and filtering it would indeed miss the pair."""
+    skin = 0.1
+    r = np.array([1.0, 1.0])
+    x0, y0 = np.array([0.0, 2.3]), np.array([0.0, 0.0])
+    x, y = np.array([0.12, 2.18]), np.array([0.0, 0.0])  # each moved 1.2 skins: now 0.6 skin apart
+    no_walls = [np.zeros(0)] * 4
+    fo, oo = pairs_cell_search(x0, y0, r, 2 * skin, *no_walls)
+    assert fo.size == 0
+    f1, _ = pairs_cell_search(x, y, r, skin, *no_walls)
+    assert f1.size == 1  # the pair the wider list does not hold
+    assert not outer_list_holds(skin, 2 * skin, x, y, x0, y0, *no_walls, *no_walls)
+    assert pairs_within(fo, oo, x, y, r, skin, *no_walls)[0].size == 0  # what using it anyway would miss
+    # and a wall that moved onto a disc: refused too
+    wa = [np.array([-5.0]), np.array([1.35]), np.array([5.0]), np.array([1.35])]
+    wb = [np.array([-5.0]), np.array([1.05]), np.array([5.0]), np.array([1.05])]
+    assert not outer_list_holds(skin, 2 * skin, x0, y0, x0, y0, *wb, *wa)
+    assert outer_list_holds(skin, 2 * skin, x0, y0, x0, y0, *wa, *wa)
 
 
 @SETTINGS
@@ -108,3 +164,23 @@ def test_energy_conserved_undamped_frictionless_drift_shrinks_with_dt(normal):
         drifts.append(np.max(np.abs(tot - tot[0])) / tot[0])
     assert drifts[0] < 0.05
     assert drifts[2] < drifts[0] / 3, drifts
+
+
+@pytest.mark.parametrize("seed", [3, 11])
+def test_the_wider_list_changes_no_result(seed, monkeypatch):
+    """A run whose builds filter the wider list (OUTER_SKIN = 4, the default) ends with the bits of one whose every
+    build runs the cell search (OUTER_SKIN = 1: the wider list never holds), with the same rebuilds, walls
+    included; and the wider list was in fact reused."""
+    import demflow.simulation as simulation
+
+    x, y, r, v, om, box = _squeezed(seed, n=60)
+    scene = gas_scene(x, y, r, 3 * v, om, ks=8e4, mu=0.5, cn=5.0, n_steps=600, walls=box_walls(box), every=50)
+    runs = {}
+    for mult in (1.0, simulation.OUTER_SKIN):
+        monkeypatch.setattr(simulation, "OUTER_SKIN", mult)
+        runs[mult] = build(scene).run()
+    a, b = runs[1.0], runs[simulation.OUTER_SKIN]
+    assert a.rebuilds == b.rebuilds > 5 and a.outer_builds == a.rebuilds and b.outer_builds < b.rebuilds
+    for k, va in a._state_arrays().items():  # the slots' order too: the cell order of the same grid
+        assert np.array_equal(np.asarray(va), np.asarray(b._state_arrays()[k])), k
+    assert np.array_equal(a.results().energy.elastic, b.results().energy.elastic)

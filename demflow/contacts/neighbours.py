@@ -16,6 +16,12 @@ itself, in the cells overlapping the square of half-side 2r + skin around its ce
 Small discs look at a 2×2 to 3×3 block, a rare large disc at a wider block, so the search
 stays O(N) for radius ratios of 100:1 and more.
 :func:`pairs_brute_force` is the O(N²) reference the cell search is tested against.
+
+Builds from a wider list (session 49): a cell search with a larger skin lists every pair the cell search with
+the skin would list for as long as the discs and walls moved little since (:func:`outer_list_holds`), so a
+build can take the pairs of that wider list whose gap is below the skin now (:func:`pairs_within`, one pass in
+key order) and run the cell search only when the wider list no longer holds
+(:meth:`demflow.simulation.Simulation._pairs_from_outer_list`).  The lists are the same either way.
 """
 from __future__ import annotations
 
@@ -264,6 +270,75 @@ def pairs_cell_search_ordered(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by,
 
 
 @njit
+def pairs_within(finder_o, other_o, x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
+    """The pairs of a wider list (finder_o, other_o) (key order, e.g. :func:`pairs_cell_search_ordered` with a larger
+    skin) whose gap is below ``skin`` now, in key order: the test of :func:`_disc_candidates` and
+    :func:`_wall_candidates` on the same numbers (x_j - x_i, r_i + r_j + skin; the segment distance against
+    r_i + skin), so where the wider list holds every pair the cell search would list, the result is the cell
+    search's (finder, other) exactly (:func:`outer_list_holds` says when; tests/test_properties.py)."""
+    n = x.shape[0]
+    m = finder_o.shape[0]
+    keep = np.empty(m, np.bool_)
+    total = 0
+    for k in range(m):
+        i = finder_o[k]
+        j = other_o[k]
+        xi = x[i]
+        yi = y[i]
+        ri = r[i]
+        if j < n:
+            dx = x[j] - xi
+            dy = y[j] - yi
+            lim = ri + r[j] + skin
+            ok = dx * dx + dy * dy < lim * lim
+        else:
+            w = j - n
+            qx, qy, d = point_segment_distance(xi, yi, wall_ax[w], wall_ay[w], wall_bx[w], wall_by[w])
+            ok = d < ri + skin
+        keep[k] = ok
+        total += 1 if ok else 0
+    finder = np.empty(total, np.int64)
+    other = np.empty(total, np.int64)
+    t = 0
+    for k in range(m):
+        if keep[k]:
+            finder[t] = finder_o[k]
+            other[t] = other_o[k]
+            t += 1
+    return finder, other
+
+
+@njit
+def outer_list_holds(skin, skin_o, x, y, x0, y0, wall_ax, wall_ay, wall_bx, wall_by, wall_ax0, wall_ay0, wall_bx0,
+                     wall_by0):
+    """True when a list of every pair with gap below ``skin_o`` at the centres (x0, y0) and walls (A0, B0) holds
+    every pair with gap below ``skin`` now.  A disc pair's centre distance changed by at most the two discs'
+    displacements, so it is enough that skin + 2D <= skin_o, D the largest displacement since (x0, y0); a
+    disc's distance to a segment by at most its displacement plus the larger of the segment's endpoint
+    displacements W (the distance to a segment is 1-Lipschitz in each endpoint), so also skin + D + W <= skin_o.
+    Both with a margin of 1e-9 of the lengths and coordinates involved, far above the rounding of the tests."""
+    n = x.shape[0]
+    d2 = 0.0
+    scale = skin_o
+    for i in range(n):
+        dx = x[i] - x0[i]
+        dy = y[i] - y0[i]
+        d2 = max(d2, dx * dx + dy * dy)
+        scale = max(scale, abs(x[i]), abs(y[i]), abs(x0[i]), abs(y0[i]))
+    W = 0.0
+    for w in range(wall_ax.shape[0]):
+        da = np.sqrt((wall_ax[w] - wall_ax0[w]) ** 2 + (wall_ay[w] - wall_ay0[w]) ** 2)
+        db = np.sqrt((wall_bx[w] - wall_bx0[w]) ** 2 + (wall_by[w] - wall_by0[w]) ** 2)
+        W = max(W, da, db)
+        scale = max(scale, abs(wall_ax[w]), abs(wall_ay[w]), abs(wall_bx[w]), abs(wall_by[w]))
+    D = np.sqrt(d2)
+    margin = 1e-9 * scale
+    if not (np.isfinite(D) and np.isfinite(W) and np.isfinite(scale)):
+        return False
+    return skin + 2.0 * D + margin <= skin_o and skin + D + W + margin <= skin_o
+
+
+@njit
 def pairs_brute_force(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by):
     """The O(N²) reference for :func:`pairs_cell_search` (same keys, same order)."""
     finder, other, _, _ = pairs_brute_force_images(x, y, r, skin, wall_ax, wall_ay, wall_bx, wall_by,
@@ -364,6 +439,12 @@ def spatial_order(x, y, r, skin):
     if x.shape[0] == 0:
         return np.empty(0, np.int64)
     return _grid(x, y, r, skin)[7]
+
+
+@njit
+def cell_order(x, y, h0):
+    """The discs in the cell order of the grid of base side ``h0`` (:func:`cell_side`)."""
+    return _grid_of_side(x, y, h0)[7]
 
 
 @njit
