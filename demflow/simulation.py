@@ -16,8 +16,8 @@ import numpy as np
 
 from .checkpoint_scene import check_same_scene, last_good_path, read_checkpoint, scene_digest, write_checkpoint
 from .contacts.forces import NO_PAIRS, pair_forces
-from .contacts.neighbours import (cell_order, cell_side, contacts_of_particles_signed, internal_layout, outer_list_holds,
-                                  pairs_cell_search_ordered, pairs_within, spatial_order, transfer_history)
+from .contacts.neighbours import (cell_order, cell_side, internal_layout, outer_list_holds, pairs_cell_search_ordered,
+                                  pairs_within, spatial_order, transfer_history)
 from .contacts.periodic import pairs_periodic
 from .integrate import Q_WIDTH, pack_rows
 from .jit import check_thread_count
@@ -367,10 +367,7 @@ class Simulation:
     def _install_pairs(self, finder, other, hist, sx, sy, perm):
         """Make (finder, other) with its history and periodic shifts (key order) the pair list, and ``perm``
         the discs' spatial order, with every array the steps derive from them."""
-        start, sidx = contacts_of_particles_signed(finder, other, self.n)
-        wall_pairs = np.flatnonzero(other >= self.n).astype(np.int64)
-        inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p = internal_layout(finder, other, self.n, perm, start, sidx,
-                                                                          wall_pairs, self.n + self.nw)
+        inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p = internal_layout(finder, other, self.n, perm, self.n + self.nw)
         sx_p, sy_p = np.empty_like(sx), np.empty_like(sy)
         sx_p[pos[:sx.shape[0]]] = sx
         sy_p[pos[:sy.shape[0]]] = sy

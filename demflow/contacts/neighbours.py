@@ -409,30 +409,6 @@ def transfer_history(old_finder, old_other, old_hist, new_finder, new_other, n_k
 
 
 @njit
-def contacts_of_particles_signed(finder, other, n):
-    """CSR list of the contacts of each disc, (start[n+1], sidx),
-    sidx = k where the disc is the finder of pair k, -(k+1) where it is the other disc."""
-    m = finder.shape[0]
-    count = np.zeros(n + 1, np.int64)
-    for k in range(m):
-        count[finder[k] + 1] += 1
-        if other[k] < n:
-            count[other[k] + 1] += 1
-    start = np.cumsum(count)
-    fill = start[:-1].copy()
-    sidx = np.empty(start[n], np.int64)
-    for k in range(m):
-        i = finder[k]
-        sidx[fill[i]] = k
-        fill[i] += 1
-        j = other[k]
-        if j < n:
-            sidx[fill[j]] = -k - 1
-            fill[j] += 1
-    return start, sidx
-
-
-@njit
 def spatial_order(x, y, r, skin):
     """Disc indices in cell order (the cells of :func:`pairs_cell_search`, row by row):
     discs close in space come close in memory."""
@@ -448,7 +424,7 @@ def cell_order(x, y, h0):
 
 
 @njit
-def internal_layout(finder, other, n, perm, start, sidx, wall_pairs, n_keys):
+def internal_layout(finder, other, n, perm, n_keys):
     """Contact lists renumbered for discs stored in the order ``perm`` (slot p holds disc
     perm[p]), pairs grouped by their finder's slot (keeping the key order within a finder).
 
@@ -457,48 +433,63 @@ def internal_layout(finder, other, n, perm, start, sidx, wall_pairs, n_keys):
     and numbering (walls keep n + w; unsigned 32-bit, ``n_keys`` = discs + walls below 2**32: the pair pass
     streams them every step, and half the bytes took 2 % off the 2D block pass at 1e5 discs and nothing at 1e4,
     benchmarks/results/speed_experiments_session48.md); (start_p, sidx_p) the per-slot contacts, each
-    slot's entries in the order of the disc's own list (start, sidx) so force sums are
-    added in the same order, naming internal pairs: 2k' where the slot's disc is internal pair k''s
-    finder, 2k' + 1 where it is its other disc (unsigned 32-bit: half the bytes of a signed 64-bit index, and
-    indexing with it needs no negative-index test);
-    wall_p = pos[wall_pairs] (same order).
+    slot's entries in key order of the disc's pairs (the order its force sums are added in), naming
+    internal pairs: 2k' where the slot's disc is internal pair k''s finder, 2k' + 1 where it is its other
+    disc (unsigned 32-bit: half the bytes of a signed 64-bit index, and indexing with it needs no
+    negative-index test); wall_p the internal positions of the wall pairs, in key order.  Written straight
+    from the key-order list (session 49: no per-disc list in disc order first, and the wall pairs found on
+    the way: 5.4 -> 2.9 ms at 1e5 discs, the same arrays).
     """
     m = finder.shape[0]
     inv = np.empty(n, np.int64)
     for p in range(n):
         inv[perm[p]] = p
     fcount = np.zeros(n + 1, np.int64)
+    deg = np.zeros(n, np.int64)
+    nwall = 0
     for k in range(m):
-        fcount[finder[k] + 1] += 1
+        i = finder[k]
+        fcount[i + 1] += 1
+        deg[i] += 1
+        j = other[k]
+        if j < n:
+            deg[j] += 1
+        else:
+            nwall += 1
     fstart = np.cumsum(fcount)
     pos = np.empty(m, np.int64)
     if n_keys > 0xFFFFFFFF:
         raise ValueError("more than 2**32 - 1 discs and walls: the internal pair list is 32-bit")
     fin_p = np.empty(m, np.uint32)
     oth_p = np.empty(m, np.uint32)
+    start_p = np.zeros(n + 1, np.int64)
     t = 0
     for p in range(n):
         i = perm[p]
+        start_p[p + 1] = start_p[p] + deg[i]
         for k in range(fstart[i], fstart[i + 1]):
             pos[k] = t
             fin_p[t] = p
             j = other[k]
             oth_p[t] = inv[j] if j < n else j
             t += 1
-    start_p = np.zeros(n + 1, np.int64)
-    for p in range(n):
-        i = perm[p]
-        start_p[p + 1] = start_p[p] + start[i + 1] - start[i]
     if 2 * m + 1 > 0xFFFFFFFF:
         raise ValueError("more than 2**31 - 1 listed pairs: the contact entries are 32-bit (2k or 2k + 1)")
+    fill = np.empty(n, np.int64)
+    for i in range(n):
+        fill[i] = start_p[inv[i]]
     sidx_p = np.empty(start_p[n], np.uint32)
-    for p in range(n):
-        i = perm[p]
-        e0 = start_p[p]
-        for e in range(start[i], start[i + 1]):
-            k = sidx[e]
-            sidx_p[e0 + e - start[i]] = 2 * pos[k] if k >= 0 else 2 * pos[-k - 1] + 1
-    wall_p = np.empty(wall_pairs.shape[0], np.int64)
-    for q in range(wall_pairs.shape[0]):
-        wall_p[q] = pos[wall_pairs[q]]
+    wall_p = np.empty(nwall, np.int64)
+    q = 0
+    for k in range(m):
+        i = finder[k]
+        sidx_p[fill[i]] = 2 * pos[k]
+        fill[i] += 1
+        j = other[k]
+        if j < n:
+            sidx_p[fill[j]] = 2 * pos[k] + 1
+            fill[j] += 1
+        else:
+            wall_p[q] = pos[k]
+            q += 1
     return inv, pos, fin_p, oth_p, start_p, sidx_p, wall_p
