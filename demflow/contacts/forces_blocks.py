@@ -6,16 +6,17 @@ columns (the centre difference, radii sum, relative velocities, the law's six nu
 (2) advanced in one loop over the block with no branch (every condition of the law a choice), which LLVM
 turns into vector instructions (on the AVX-512 host of 2026-12-03: ``vsqrtpd`` and ``vdivpd`` on 8-lane zmm
 registers, masked stores for the choices), and (3) scattered back: the history, the force row and the dissipation
-sum of each pair.  A block's columns are ``COL`` = BLOCK + 8 numbers long, not 2048 bytes: columns a multiple of
-4096 bytes apart made loads wait on unrelated stores (4K aliasing; on that host's 1e4-disc benchmark state the
-padding took the pass from 1.03 of the scalar pass's time to 0.74-0.77, ratio of the minima:
-benchmarks/results/speed_experiments_session45.md).  One material pair in a block (a packing of
+sum of each pair.  A block's columns are ``COL`` = BLOCK + 8 numbers long: with 256-pair blocks (sessions 45-48)
+columns a multiple of 4096 bytes apart made loads wait on unrelated stores (4K aliasing; on that host's 1e4-disc
+benchmark state the padding took the pass from 1.03 of the scalar pass's time to 0.74-0.77, ratio of the minima:
+benchmarks/results/speed_experiments_session45.md).  Blocks of 16 pairs since session 49 (see :data:`BLOCK`).  One material pair in a block (a packing of
 one material) fills the law's six columns with its row instead of reading each pair's, and once for a chunk of such
 blocks (session 48).
 
 Measured (benchmarks/results/speed2d_session45_blocks_ab.md, in one process against the scalar pass, 20 rounds,
 AMD EPYC Zen 4): the whole 2D step 0.885 of its time at 1e4 discs (per-round median; ratio of the minima 0.896);
-at 1e5 0.992 (1.057): there the pass waits on memory, which the blocks do not change.
+at 1e5 0.992 (1.057) with 256-pair blocks, whose 44 KB of work arrays pushed the pairs' rows out of the first-level
+cache between the gather and the scatter: what sessions 45-48 read as the pass waiting on memory.
 
 The numbers are those of :func:`pair_forces` with :func:`demflow.laws.linear.linear_contact` to the bit:
 every operation is the same IEEE operation in the same order (a vector square root or division rounds as
@@ -43,9 +44,14 @@ from ..laws.linear import LinearParams, linear_contact
 from ..space import other_centre
 from .forces import pair_forces
 
-BLOCK = 256  # pairs per block: a fixed trip count, so the vector loop's columns are provably apart
+# pairs per block: a fixed trip count, so the vector loop's columns are provably apart.  16 since session 49: the work
+# arrays of a block (21 columns) then take 4 KB instead of 44 KB (256 pairs, sessions 45-48), and the pass over the
+# 1e5-disc benchmark state took 0.72-0.73 of its time (10.6 against 14.8 ns a pair, nearly the 1e4 state's 9.5), at
+# 1e4 0.88-0.93 (speed_experiments_session49.md): a block's gathered rows and its history, force and dissipation
+# rows are still in the first-level cache when the block scatters back
+BLOCK = 16
 COL = BLOCK + 8  # a column's length in the work arrays: columns not 4096 bytes apart (no 4K aliasing)
-CHUNK = 16  # blocks per parallel task (its work arrays allocated once); the results do not depend on it
+CHUNK = 256  # blocks per parallel task (its work arrays allocated once: 4096 pairs); the results do not depend on it
 
 # the work array's input columns (each BLOCK long)
 _DX, _DY, _RS, _RMIN, _RVX, _RVY, _SPIN, _KN, _KS, _CN, _CS, _MU, _COH, _NOLD, _SOLD = range(15)
