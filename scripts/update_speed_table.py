@@ -52,6 +52,8 @@ BLOCKS_2D = "blocks (4868504)"
 BLOCKS_2D_U32 = "blocks, uint32 list (4ee0bc8)"
 BLOCKS_2D_WALLBOX = "blocks, uint32 list, wall boxes (d08d51b)"
 BLOCKS_2D_LAWONCE = "blocks, uint32 list, wall boxes, law columns once (e37431e)"
+BLOCKS_2D_S49_BUILDS = "blocks of 256, builds from a wider list (0baaddc)"
+BLOCKS_2D_S49_16 = "blocks of 16 pairs, builds from a wider list (ef22006)"
 RUNS_2D = [
     ("engines_speed_zen1_session41", "AMD EPYC Zen 1 (znver1), AVX2", SCALAR_2D),
     ("engines_speed_emr_session42", "Intel Xeon Emerald Rapids (emeraldrapids), AVX-512", SCALAR_2D),
@@ -62,6 +64,9 @@ RUNS_2D = [
     ("engines_speed_zen4_session48", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_U32),
     ("engines_speed_zen4_session48_second", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_WALLBOX),
     ("engines_speed_zen4_session48_third", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_LAWONCE),
+    ("engines_speed_zen4_session49", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_S49_BUILDS),
+    ("engines_speed_zen4_session49_second", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_S49_16),
+    ("engines_speed_zen4_session49_third", "AMD EPYC Zen 4 (znver4), AVX-512", BLOCKS_2D_S49_16),
 ]
 
 
